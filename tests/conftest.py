@@ -1,0 +1,40 @@
+"""Shared fixtures: the real CMU clips in ``$UPM_DATA`` (default ``../shared/data/cmu``)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+DATA_DIR = Path(os.environ.get("UPM_DATA", REPO.parent / "shared" / "data" / "cmu"))
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+
+#: Flat-ground walks and runs (SPEC section 5's self-collision calibration set).
+FLAT_WALK_RUN = ("02_01", "02_02", "02_03", "05_01", "09_06", "16_15", "35_01", "141_01")
+
+
+@pytest.fixture(scope="session")
+def data_dir() -> Path:
+    if not (DATA_DIR / "clips.csv").exists():
+        pytest.fail(f"CMU data not found at {DATA_DIR}: set UPM_DATA")
+    return DATA_DIR
+
+
+@pytest.fixture(scope="session")
+def catalog(data_dir):
+    from upm.catalog import Catalog
+
+    return Catalog(data_dir)
+
+
+@pytest.fixture(scope="session")
+def all_motions(catalog):
+    """Every clip of the data directory, read once: {name: Motion}."""
+    return {info.name: catalog.load(info.name) for info in catalog}
+
+
+@pytest.fixture(scope="session")
+def walk(catalog):
+    return catalog.load("02_01")
