@@ -1,0 +1,230 @@
+"""Reader and writer of Acclaim AMC motion files.
+
+An AMC frame is a frame-number line followed by one line per bone with DOFs (root
+first in CMU files, but any order is accepted): the bone name and its values in the
+order the ASF declares (the root in its ``order``). Values are degrees (``:DEGREES``,
+the default) or radians (``:RADIANS``); root translations are in ASF length units.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from upm.errors import DataFileError
+from upm.fileio import atomic_open
+from upm.motion import Motion
+from upm.skeleton import JOINTS, ROOT_CHANNELS, Skeleton, joint_dof_index
+from upm.textfile import read_text_lines
+
+
+class ChannelLayout:
+    """Where each bone's values sit in one AMC frame, and how they map to a Motion.
+
+    Attributes
+    ----------
+    bones : list of (name, column, count)
+        Every bone with values, root first, in ``skeleton.bone_names`` order.
+    n_channels : int
+        Values per frame (62 for CMU).
+    root_columns : ndarray of int, shape (6,)
+        Column of tx, ty, tz, rx, ry, rz.
+    posture_columns : ndarray of int, shape (63,)
+        Column of every posture DOF, -1 where undeclared.
+    extra_columns : ndarray of int, shape (E,)
+        Columns of ``skeleton.extra_channels``.
+    """
+
+    def __init__(self, skeleton: Skeleton):
+        self.bones: list[tuple[str, int, int]] = [("root", 0, 6)]
+        column = 6
+        posture_columns = np.full(63, -1)
+        extra_columns = []
+        joints = set(JOINTS)
+        for b, name in enumerate(skeleton.bone_names[1:], start=1):
+            dofs = skeleton.dofs[b]
+            if not dofs:
+                continue
+            self.bones.append((name, column, len(dofs)))
+            for k, dof in enumerate(dofs):
+                if name in joints:
+                    posture_columns[joint_dof_index(name, dof)] = column + k
+                else:
+                    extra_columns.append(column + k)
+            column += len(dofs)
+        self.n_channels = column
+        self.root_columns = np.array([skeleton.root_order.index(c) for c in ROOT_CHANNELS])
+        self.posture_columns = posture_columns
+        self.extra_columns = np.array(extra_columns, dtype=int)
+        self.by_name = {name: (col, n) for name, col, n in self.bones}
+
+
+def _to_motion(skeleton, layout, values, fps, radians, name) -> Motion:
+    """(T, C) raw AMC values -> Motion."""
+    rotation_scale = 180.0 / math.pi if radians else 1.0
+    root = values[:, layout.root_columns].copy()
+    root[:, :3] *= skeleton.length_to_m
+    root[:, 3:] *= rotation_scale
+    posture = np.zeros((values.shape[0], 63))
+    declared = layout.posture_columns >= 0
+    posture[:, declared] = values[:, layout.posture_columns[declared]] * rotation_scale
+    extra = values[:, layout.extra_columns] * rotation_scale
+    return Motion(skeleton, posture, root, fps=fps, extra_deg=extra, name=name)
+
+
+def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
+             name: str | None = None) -> Motion:
+    """Read an AMC file with the skeleton of its subject.
+
+    Parameters
+    ----------
+    path : path-like
+    skeleton : Skeleton
+        The subject's ASF (an AMC must be read with its own subject's skeleton).
+    fps : float
+        Frame rate; an AMC file carries none (CMU: 120, or 60 for some subjects).
+    name : str, optional
+        Label for the motion (default: the file name without extension).
+
+    Returns
+    -------
+    Motion
+
+    Raises
+    ------
+    DataFileError
+        Naming file and line: unknown bone, a bone missing from a frame or given twice,
+        a wrong number of values, a non-numeric, NaN or infinite value, frame numbers out
+        of order, a truncated last frame, no frames at all.
+    """
+    lines = read_text_lines(path, "AMC")
+    layout = ChannelLayout(skeleton)
+    n_bones = len(layout.bones)
+    by_name = layout.by_name
+    asf_name = os.path.basename(skeleton.source)
+
+    radians = False
+    rows: list[list[float]] = []
+    frame_lines: list[int] = []
+    row: list[float] | None = None
+    seen: set[str] = set()
+    frame_number = None
+    frame_line = 0
+
+    def close_frame(at_line: int) -> None:
+        if len(seen) != n_bones:
+            missing = [b for b, _, _ in layout.bones if b not in seen]
+            raise DataFileError(
+                path, f"frame {frame_number} (line {frame_line}) lacks bone {missing[0]!r}"
+                f"{' and ' + str(len(missing) - 1) + ' more' if len(missing) > 1 else ''}"
+                f"{' (truncated file?)' if at_line > len(lines) else ''}", at_line)
+        rows.append(row)
+        frame_lines.append(frame_line)
+
+    for lineno, raw in enumerate(lines, start=1):
+        parts = raw.split()
+        if not parts or parts[0].startswith("#"):
+            continue
+        head = parts[0]
+        if head.startswith(":"):
+            if row is not None:
+                raise DataFileError(path, f"keyword {head} after the first frame", lineno)
+            keyword = head.upper()
+            if keyword == ":RADIANS":
+                radians = True
+            elif keyword == ":DEGREES":
+                radians = False
+            continue
+        if len(parts) == 1 and head.isdigit():
+            number = int(head)
+            if row is not None:
+                close_frame(lineno)
+                if number != frame_number + 1:
+                    raise DataFileError(path, f"frame {number} follows frame {frame_number} "
+                                              f"(expected {frame_number + 1})", lineno)
+            frame_number, frame_line = number, lineno
+            row = [0.0] * layout.n_channels
+            seen = set()
+            continue
+        if row is None:
+            raise DataFileError(path, f"expected a frame number, found {raw.strip()[:40]!r}",
+                                lineno)
+        entry = by_name.get(head)
+        if entry is None:
+            if head in skeleton.bone_names:
+                raise DataFileError(path, f"bone {head!r} has values but no dofs in {asf_name} "
+                                          "(does this AMC belong to another skeleton?)", lineno)
+            raise DataFileError(path, f"unknown bone {head!r} (not in {asf_name}: does this "
+                                      "AMC belong to another skeleton?)", lineno)
+        if head in seen:
+            raise DataFileError(path, f"bone {head!r} appears twice in frame {frame_number}",
+                                lineno)
+        seen.add(head)
+        column, count = entry
+        if len(parts) - 1 != count:
+            raise DataFileError(path, f"bone {head!r} needs {count} values, found "
+                                      f"{len(parts) - 1}", lineno)
+        try:
+            row[column:column + count] = [float(v) for v in parts[1:]]
+        except ValueError:
+            raise DataFileError(path, f"non-numeric value for bone {head!r}: "
+                                      f"{' '.join(parts[1:])}", lineno) from None
+    if row is None:
+        raise DataFileError(path, "no frames (an AMC needs frame-number lines with bone values)")
+    close_frame(len(lines) + 1)
+
+    values = np.array(rows, dtype=float)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, column = np.argwhere(bad)[0]
+        bone = next(b for b, c, n in layout.bones if c <= column < c + n)
+        lineno = _find_bone_line(lines, frame_lines[frame], bone)
+        raise DataFileError(path, f"NaN or infinite value for bone {bone!r}", lineno)
+    label = name if name is not None else os.path.splitext(os.path.basename(path))[0]
+    return _to_motion(skeleton, layout, values, fps, radians, label)
+
+
+def _find_bone_line(lines: list[str], start: int, bone: str) -> int:
+    for lineno in range(start + 1, len(lines) + 1):
+        parts = lines[lineno - 1].split()
+        if parts and parts[0] == bone:
+            return lineno
+    return start
+
+
+def motion_channels(motion: Motion) -> np.ndarray:
+    """A motion's values in AMC channel order and ASF units, shape (T, C)."""
+    skeleton = motion.skeleton
+    layout = ChannelLayout(skeleton)
+    values = np.zeros((motion.n_frames, layout.n_channels))
+    root = motion.root.copy()
+    root[:, :3] /= skeleton.length_to_m
+    values[:, layout.root_columns] = root
+    declared = layout.posture_columns >= 0
+    values[:, layout.posture_columns[declared]] = motion.posture_deg[:, declared]
+    if motion.extra_deg is not None:
+        values[:, layout.extra_columns] = motion.extra_deg
+    return values
+
+
+def write_amc(path: str | os.PathLike, motion: Motion, precision: int = 10) -> None:
+    """Write a motion as an AMC file (degrees, frames numbered from 1), atomically.
+
+    Values are printed with ``precision`` significant digits, so reading the file back
+    gives the same numbers to that precision. Channels outside the 21 joints are written
+    from ``motion.extra_deg`` (zeros if it is ``None``).
+    """
+    layout = ChannelLayout(motion.skeleton)
+    values = motion_channels(motion)
+    number = f"%.{precision}g"
+    frame_format = "%d\n" + "".join(
+        f"{name} " + " ".join([number] * count) + "\n" for name, _, count in layout.bones
+    )
+    header = (f"#!OML:ASF {os.path.basename(motion.skeleton.source)}\n"
+              "# written by upm-controller\n:FULLY-SPECIFIED\n:DEGREES\n")
+    with atomic_open(path, "w", encoding="utf-8", newline="\n") as handle:
+        handle.write(header)
+        for t in range(values.shape[0]):
+            handle.write(frame_format % (t + 1, *values[t]))
