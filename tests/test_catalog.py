@@ -1,0 +1,70 @@
+"""The clip catalogue and clip references."""
+
+import warnings
+
+import pytest
+
+from upm.catalog import Catalog, ClipRef, parse_clip_ref
+from upm.errors import UsageError
+
+
+def test_catalogue_matches_clips_csv(catalog):
+    assert len(catalog) == 26
+    assert catalog.info("60_10").fps == 60 and catalog.info("141_01").fps == 60
+    assert catalog.info("02_01").fps == 120
+    assert catalog.info("02_01").split == "test" and catalog.info("02_02").split == "train"
+    assert catalog.info("131_04").asf_path.name == "131.asf"
+    assert len(catalog.names("train")) == 19 and len(catalog.names("test")) == 7
+    assert catalog.names()[:3] == ["01_01", "01_08", "02_01"]
+
+
+def test_unknown_clip_is_a_usage_error(catalog):
+    with pytest.raises(UsageError, match="no clip '99_99'"):
+        catalog.info("99_99")
+
+
+@pytest.mark.parametrize("text, ref", [
+    ("02_01", ClipRef("02_01")),
+    ("02_01@10", ClipRef("02_01", 10)),
+    ("02_01@10:200", ClipRef("02_01", 10, 200, True)),
+    ("02_01@:200", ClipRef("02_01", None, 200, True)),
+    ("02_01@-50:", ClipRef("02_01", -50, None, True)),
+])
+def test_parse_clip_ref(text, ref):
+    assert parse_clip_ref(text) == ref
+    assert str(parse_clip_ref(text)) == text
+
+
+@pytest.mark.parametrize("text", ["", "02_01@", "02_01@a:b", "02_01@1:2:3", "a b"])
+def test_bad_clip_refs(text):
+    with pytest.raises(UsageError, match="bad clip reference"):
+        parse_clip_ref(text)
+
+
+def test_load_ref_slices(catalog):
+    assert catalog.load_ref("02_01@10:30").n_frames == 20
+    assert catalog.load_ref("02_01@5").n_frames == 1
+    assert catalog.load_ref("02_01@-40:").n_frames == 40
+    with pytest.raises(UsageError, match="out of range"):
+        catalog.load_ref("02_01@300:400")
+
+
+def test_unlisted_clip_read_at_120_with_warning(tmp_path, data_dir):
+    (tmp_path / "02").mkdir()
+    for name in ("02.asf", "02_03.amc"):
+        (tmp_path / "02" / name).write_bytes((data_dir / "02" / name).read_bytes())
+    (tmp_path / "02" / "02_99.amc").write_bytes((data_dir / "02" / "02_03.amc").read_bytes())
+    (tmp_path / "clips.csv").write_text("clip,subject,fps,frames,split,description\n"
+                                        "02_03,02,120,173,test,run\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        catalog = Catalog(tmp_path)
+    assert any("02_99 is not in clips.csv" in str(w.message) for w in caught)
+    assert catalog.info("02_99").fps == 120 and catalog.info("02_99").split == ""
+
+
+def test_missing_data_dir(tmp_path):
+    with pytest.raises(UsageError, match="does not exist"):
+        Catalog(tmp_path / "nowhere")
+    with pytest.raises(UsageError, match="no clips"):
+        Catalog(tmp_path)

@@ -1,0 +1,5 @@
+import sys
+
+from upm.cli import main
+
+sys.exit(main())

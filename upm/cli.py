@@ -1,0 +1,80 @@
+"""The ``upm`` command line.
+
+Every subcommand lives in its own module, named in :data:`COMMANDS`, with
+
+- ``HELP``: a one-line summary, and the module docstring as its description;
+- ``configure(parser)``: adds its arguments (no heavy imports at module level);
+- ``run(args) -> int``: does the work, importing MuJoCo and friends only here.
+
+Bad input (an :class:`~upm.errors.UpmError`, a bad argument, an unwritable output)
+prints one line on stderr and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import warnings
+
+from upm.errors import UpmError
+
+#: Subcommand name -> module implementing it, in the order ``upm --help`` lists them.
+COMMANDS: dict[str, str] = {
+    "clips": "upm.commands.clips",
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one line on stderr, exit code 2."""
+
+    def error(self, message):  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    return f"upm: warning: {message}\n"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="upm",
+        description="Uniform Posture Map motion transitions (Lee & Chung 2001) on CMU motion "
+        "capture, checked for physical validity on a MuJoCo humanoid.",
+        epilog="Data: --data DIR, default $UPM_DATA (the CMU clips, e.g. ../shared/data/cmu). "
+        "A CLIP is a name such as 02_01; CLIP@F is frame F (0-based), CLIP@A:B frames A to B-1.",
+    )
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    subparsers.required = True
+    for name, module_name in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        sub = subparsers.add_parser(
+            name, help=module.HELP, description=module.__doc__,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        module.configure(sub)
+        sub.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    warnings.formatwarning = _one_line_warning
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except UpmError as exc:
+        print(f"upm {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        target = f" {exc.filename}" if exc.filename else ""
+        print(f"upm {args.command}: error:{target}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"upm {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Subcommands of the ``upm`` command line (see :mod:`upm.cli`)."""

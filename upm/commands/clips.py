@@ -1,0 +1,66 @@
+"""List the clips of a data directory: subject, frames, duration, frame rate, split,
+description, and the share of angle samples outside the ASF's own joint limits.
+
+Real motion capture leaves its ASF limits: over every declared DOF (the column
+'out%'), 3-14 % of the CMU samples here lie outside them after wrapping to [-180, 180);
+'pose_out%' counts only the 45 declared DOFs of the 21-joint posture. This is the first
+calibration figure of the project: a transition method can only be judged against it.
+"""
+
+from __future__ import annotations
+
+from upm.commands.common import add_data_argument, format_table, print_json
+
+HELP = "list the clips of a data directory, with their out-of-limit share"
+
+
+def configure(parser) -> None:
+    add_data_argument(parser)
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--split", choices=["train", "test"], default=None,
+                        help="only the clips of this split of clips.csv")
+
+
+def clip_rows(catalog, names) -> list[dict]:
+    """One row per clip: the catalogue fields and the out-of-limit shares."""
+    from upm.limits import outside_share
+    from upm.progress import progress
+
+    rows = []
+    for name in progress(names, desc="reading clips", unit="clip"):
+        info = catalog.info(name)
+        motion = catalog.load(name)
+        share_all, share_posture = outside_share(motion)
+        rows.append({
+            "clip": name,
+            "subject": info.subject,
+            "frames": motion.n_frames,
+            "seconds": round(motion.duration_s, 3),
+            "fps": info.fps,
+            "split": info.split,
+            "description": info.description,
+            "outside_limits_pct": round(100 * share_all, 2),
+            "posture_outside_limits_pct": round(100 * share_posture, 2),
+        })
+    return rows
+
+
+def run(args) -> int:
+    from upm.catalog import Catalog
+
+    catalog = Catalog(args.data)
+    rows = clip_rows(catalog, catalog.names(args.split))
+    if args.json:
+        print_json({"data": str(catalog.root), "clips": rows})
+        return 0
+    for row in rows:
+        row["description"] = row["description"][:44]
+    print(format_table(rows, [
+        ("clip", "clip", "<"), ("subject", "subj", "<"), ("frames", "frames", ">d"),
+        ("seconds", "seconds", ">.1f"), ("fps", "fps", ">g"), ("split", "split", "<"),
+        ("outside_limits_pct", "out%", ">.1f"), ("posture_outside_limits_pct", "pose_out%", ">.1f"),
+        ("description", "description", "<"),
+    ]))
+    total = sum(r["frames"] for r in rows)
+    print(f"\n{len(rows)} clips, {total} frames, from {catalog.root}")
+    return 0

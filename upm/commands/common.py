@@ -1,0 +1,42 @@
+"""Arguments and output helpers shared by several subcommands."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+
+def add_data_argument(parser) -> None:
+    """``--data DIR``: the clips' directory (default ``$UPM_DATA``)."""
+    parser.add_argument(
+        "--data", metavar="DIR", default=None,
+        help="directory of CMU clips (NN/NN.asf, NN/NN_MM.amc, clips.csv); "
+        "default: $UPM_DATA",
+    )
+
+
+def print_json(obj) -> None:
+    """Print ``obj`` as indented JSON on stdout."""
+    json.dump(obj, sys.stdout, indent=2)
+    sys.stdout.write("\n")
+
+
+def format_table(rows: list[dict], columns: list[tuple[str, str, str]]) -> str:
+    """A plain-text table.
+
+    Parameters
+    ----------
+    rows : list of dict
+    columns : list of (key, header, format)
+        ``format`` is a format spec such as ``">8.1f"`` or ``"<12"``.
+    """
+    cells = [[format(row[key], fmt.lstrip("<>^")) for key, _, fmt in columns] for row in rows]
+    widths = [max([len(h)] + [len(c[i]) for c in cells]) for i, (_, h, _) in enumerate(columns)]
+    align = [">" if fmt.startswith(">") else "<" for _, _, fmt in columns]
+
+    def line(values):
+        return "  ".join(f"{v:{a}{w}}" for v, a, w in zip(values, align, widths, strict=True))
+
+    out = [line([h for _, h, _ in columns]), line(["-" * w for w in widths])]
+    out += [line(c) for c in cells]
+    return "\n".join(out)
