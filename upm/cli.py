@@ -22,6 +22,7 @@ from upm.errors import UpmError
 #: Subcommand name -> module implementing it, in the order ``upm --help`` lists them.
 COMMANDS: dict[str, str] = {
     "clips": "upm.commands.clips",
+    "bench": "upm.commands.bench",
 }
 
 

@@ -1,0 +1,1 @@
+"""The comparison study: transition pairs, metrics, statistics, figures, benchmarks."""

@@ -1,0 +1,33 @@
+"""``upm bench``: every benchmark runs (quick mode) and reports finite figures."""
+
+import json
+import math
+
+from upm.cli import main
+
+
+def _numbers(obj):
+    if isinstance(obj, dict):
+        for v in obj.values():
+            yield from _numbers(v)
+    elif isinstance(obj, list):
+        for v in obj:
+            yield from _numbers(v)
+    elif isinstance(obj, (int, float)) and not isinstance(obj, bool):
+        yield obj
+
+
+def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
+    out = tmp_path / "bench.json"
+    assert main(["bench", "--data", str(data_dir), "--quick", "--out", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert report == json.loads(capsys.readouterr().out)
+    assert "io" in report["benchmarks"]
+    io = report["benchmarks"]["io"]
+    assert io["frames"] > 0 and io["parse_us_per_frame"] > 0 and io["fk_us_per_frame"] > 0
+    assert all(math.isfinite(x) for x in _numbers(report))
+
+
+def test_bench_unknown_name(data_dir, capsys):
+    assert main(["bench", "--data", str(data_dir), "--only", "nope"]) == 2
+    assert "no benchmark 'nope'" in capsys.readouterr().err

@@ -1,0 +1,55 @@
+"""Measure the performance figures and print them as JSON.
+
+Every figure stands next to a reference measured in the same run on the same machine
+(for example raw MuJoCo mj_step throughput, or a plain cKDTree query), with the ratio,
+since absolute timings vary between machines.
+"""
+
+from __future__ import annotations
+
+HELP = "performance figures as JSON (each with a same-run reference and a ratio)"
+
+
+def configure(parser) -> None:
+    from upm.commands.common import add_data_argument
+
+    add_data_argument(parser)
+    parser.add_argument("--only", nargs="+", metavar="NAME", default=None,
+                        help="run only these benchmarks (default: all)")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer repetitions and smaller inputs (rougher figures)")
+    parser.add_argument("--out", metavar="FILE.json", default=None,
+                        help="also write the JSON to this file")
+
+
+def run(args) -> int:
+    import json
+    import platform
+
+    from eval.bench import BenchContext, discover
+    from upm.catalog import Catalog
+    from upm.commands.common import print_json
+    from upm.errors import UsageError
+    from upm.fileio import atomic_write_text
+    from upm.progress import progress
+
+    catalog = Catalog(args.data)
+    modules = discover()
+    names = args.only or list(modules)
+    unknown = [n for n in names if n not in modules]
+    if unknown:
+        raise UsageError(f"no benchmark {unknown[0]!r} (known: {', '.join(modules)})")
+    context = BenchContext(data_dir=catalog.root, quick=args.quick)
+    report = {
+        "schema": 1,
+        "machine": {"python": platform.python_version(), "processor": platform.machine(),
+                    "system": platform.system()},
+        "quick": args.quick,
+        "benchmarks": {},
+    }
+    for name in progress(names, desc="benchmarks", unit="bench"):
+        report["benchmarks"][name] = modules[name].run(context)
+    if args.out:
+        atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
+    print_json(report)
+    return 0
