@@ -26,8 +26,9 @@ The model (``build_mjcf``):
   control vector (radians). ``ctrlrange`` is inherited from the joint range (radians).
   Gains scale with what each joint moves: ``kp = I w^2`` and ``kv = 2 I w`` (critical
   damping) with ``I`` the joint-space inertia of the hinge at rest (the diagonal of the
-  mass matrix: the inertia of everything the joint moves, about its axis) and
-  ``w = 2 pi x 6 Hz``. Damped position actuators need the ``implicitfast`` integrator.
+  mass matrix: the inertia of everything the joint moves, about its axis, plus the
+  joint's 0.01 kg m^2 armature) and ``w = 2 pi x 6 Hz``. Damped position actuators need
+  the ``implicitfast`` integrator.
 - **Floor.** A plane at z = 0; the root's rest height puts the lowest geom on it.
 """
 
