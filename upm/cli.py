@@ -23,6 +23,7 @@ from upm.errors import UpmError
 COMMANDS: dict[str, str] = {
     "clips": "upm.commands.clips",
     "bench": "upm.commands.bench",
+    "model": "upm.commands.model",
 }
 
 
