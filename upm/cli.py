@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "clips": "upm.commands.clips",
     "bench": "upm.commands.bench",
     "model": "upm.commands.model",
+    "check": "upm.commands.check",
 }
 
 
