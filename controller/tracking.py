@@ -96,6 +96,8 @@ class Tracking:
         warning.
     warnings : dict of str to int
         MuJoCo's warning counters that are not zero (``"mjWARN_CONTACTFULL"``: n).
+    messages : tuple of str
+        MuJoCo's warning texts (the first 10 distinct ones).
     """
 
     mode: str
@@ -121,6 +123,7 @@ class Tracking:
     fall_frame: int | None
     diverged_frame: int | None
     warnings: dict[str, int]
+    messages: tuple[str, ...] = ()
 
     @property
     def n_frames(self) -> int:
@@ -194,6 +197,7 @@ class Tracking:
                           "reference's is not"),
             "diverged_frame": self.diverged_frame,
             "warnings": dict(self.warnings),
+            "warning_messages": list(self.messages),
             "limit_active_steps_pct": round(100 * self.limit_steps / max(self.steps, 1), 2),
             "limit_joint_steps": dict(self.limit_joint_steps),
             **self.summary(),
@@ -205,7 +209,7 @@ def physics_substeps(fps: float, max_step_s: float = MAX_STEP_S) -> int:
     return max(1, math.ceil(1.0 / (fps * max_step_s) - 1e-9))
 
 
-def track(model, motion, mode: str = "free") -> Tracking:
+def track(model, motion, mode: str = "free", lead: bool = True) -> Tracking:
     """Simulate the humanoid with its servos following a motion.
 
     Parameters
@@ -216,6 +220,8 @@ def track(model, motion, mode: str = "free") -> Tracking:
         The reference, at least 2 frames.
     mode : str
         ``"free"`` (root free on the floor) or ``"driven"`` (root along the reference).
+    lead : bool
+        Servo targets ahead of the reference by ``kv/kp`` (:func:`servo_lead_s`).
 
     Returns
     -------
@@ -225,7 +231,7 @@ def track(model, motion, mode: str = "free") -> Tracking:
 
     if motion.n_frames < 2:
         raise ValueError("tracking needs a motion of at least 2 frames")
-    return track_qpos(model, to_qpos(model, motion), motion.fps, mode)
+    return track_qpos(model, to_qpos(model, motion), motion.fps, mode, lead)
 
 
 @dataclass(frozen=True, eq=False)
@@ -278,7 +284,8 @@ class TrackingPlan:
         return data
 
 
-def plan_tracking(model, reference_qpos, fps: float, mode: str = "free") -> TrackingPlan:
+def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
+                  lead: bool = True) -> TrackingPlan:
     """The step-by-step inputs of a tracking simulation (see the module docstring).
 
     Parameters
@@ -289,6 +296,8 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free") -> Trac
     fps : float
     mode : str
         ``"free"`` or ``"driven"``.
+    lead : bool
+        Take servo targets :func:`servo_lead_s` ahead of the reference (else at it).
 
     Returns
     -------
@@ -311,7 +320,7 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free") -> Trac
     free_q = slice(layout.free_qpos, layout.free_qpos + 7)
     free_v = slice(layout.free_dof, layout.free_dof + 6)
     half_vel = _half_step_velocities(sim, ref, fps)  # (T-1, nv)
-    ctrl = _actuator_targets(sim, ref, substeps, servo_lead_s(sim) * fps)
+    ctrl = _actuator_targets(sim, ref, substeps, servo_lead_s(sim) * fps * float(lead))
     driven = mode == "driven"
     start = ref[0].copy()
     if not driven:
@@ -324,14 +333,15 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free") -> Trac
     )
 
 
-def track_qpos(model, reference_qpos, fps: float, mode: str = "free") -> Tracking:
+def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
+               lead: bool = True) -> Tracking:
     """:func:`track` on a reference given as ``qpos``, shape (T, nq), at ``fps``."""
     import mujoco
 
     from controller.body import body_figures
     from controller.qpos import joint_layout
 
-    plan = plan_tracking(model, reference_qpos, fps, mode)
+    plan = plan_tracking(model, reference_qpos, fps, mode, lead)
     sim, ref, substeps = plan.model, plan.reference_qpos, plan.substeps
     ctrl, root_q, root_v = plan.ctrl, plan.root_qpos, plan.root_qvel
     n_frames = ref.shape[0]
@@ -377,26 +387,34 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free") -> Trackin
 
     sample(0)
     steps = 0
+    messages: list[str] = []
+    previous_handler = mujoco.get_mju_user_warning()
+    # MuJoCo's own handler prints and appends to MUJOCO_LOG.TXT in the working directory;
+    # the messages go into the result instead.
+    mujoco.set_mju_user_warning(lambda text: messages.append(" ".join(str(text).split())))
     clock = time.perf_counter()
-    for t in range(1, n_frames):
-        for k in range((t - 1) * substeps, t * substeps):
-            data.ctrl[:] = ctrl[k]
-            if root_q is not None:
-                data.qpos[free_q] = root_q[k]
-                data.qvel[free_v] = root_v[k]
-            mujoco.mj_step(sim, data)
-            steps += 1
-            nl = data.nl
-            if nl:
-                # MuJoCo orders constraint rows: equality, friction, limit, contact.
-                limit_steps += 1
-                first = data.ne + data.nf
-                joint_steps[data.efc_id[first:first + nl]] += 1
-        bad = any(data.warning[w].number for w in fatal)
-        if bad or not np.all(np.isfinite(data.qpos)):
-            diverged = t
-            break
-        sample(t)
+    try:
+        for t in range(1, n_frames):
+            for k in range((t - 1) * substeps, t * substeps):
+                data.ctrl[:] = ctrl[k]
+                if root_q is not None:
+                    data.qpos[free_q] = root_q[k]
+                    data.qvel[free_v] = root_v[k]
+                mujoco.mj_step(sim, data)
+                steps += 1
+                nl = data.nl
+                if nl:
+                    # MuJoCo orders constraint rows: equality, friction, limit, contact.
+                    limit_steps += 1
+                    first = data.ne + data.nf
+                    joint_steps[data.efc_id[first:first + nl]] += 1
+            bad = any(data.warning[w].number for w in fatal)
+            if bad or not np.all(np.isfinite(data.qpos)):
+                diverged = t
+                break
+            sample(t)
+    finally:
+        mujoco.set_mju_user_warning(previous_handler)
     wall = time.perf_counter() - clock
 
     ref_pelvis, ref_head = _reference_heights(sim, ref, root_body, head_site)
@@ -419,6 +437,7 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free") -> Trackin
         fall_frame=_fall_frame(pelvis, head, ref_pelvis, ref_head, figures),
         diverged_frame=diverged,
         warnings={k: v for k, v in warnings.items() if v},
+        messages=tuple(dict.fromkeys(messages))[:10],
     )
 
 
