@@ -323,3 +323,54 @@ def _write_mp4(images, rate: float, path: Path) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def has_display() -> bool:
+    """Whether an interactive window can be opened here (macOS and Windows always; Linux
+    with ``DISPLAY`` or ``WAYLAND_DISPLAY`` set)."""
+    if not sys.platform.startswith("linux"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def play_in_viewer(model, qpos, fps: float, *, loops: int = 1) -> None:
+    """Play states in MuJoCo's interactive viewer at real time (``mujoco.viewer``).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    qpos : ndarray, shape (T, nq)
+    fps : float
+    loops : int
+        How many times to play it (the window can be closed at any time).
+
+    Raises
+    ------
+    UsageError
+        Where there is no display.
+    """
+    import time
+
+    from upm.errors import UsageError
+
+    if not has_display():
+        raise UsageError("--viewer needs a display (DISPLAY is not set); use --video "
+                         "V.mp4 to render offscreen instead")
+    import mujoco
+    import mujoco.viewer
+
+    qpos = np.asarray(qpos, dtype=float)
+    qpos = qpos[np.all(np.isfinite(qpos), axis=1)]
+    data = mujoco.MjData(model)
+    with mujoco.viewer.launch_passive(model, data) as viewer:
+        for _ in range(loops):
+            start = time.perf_counter()
+            for t, q in enumerate(qpos):
+                if not viewer.is_running():
+                    return
+                data.qpos[:] = q
+                mujoco.mj_forward(model, data)
+                viewer.sync()
+                delay = start + t / fps - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)

@@ -193,7 +193,7 @@ def write_report(report: dict, json_path: str | os.PathLike,
 
 
 #: Per-name breakdowns kept in the JSON only (their keys vary from row to row).
-_JSON_ONLY = frozenset({"pairs", "dofs", "limit_joint_steps", "warnings"})
+_JSON_ONLY = frozenset({"pairs", "dofs", "limit_joint_frames", "warnings"})
 
 
 def _flat(tree: dict, prefix: str = "") -> dict:

@@ -76,8 +76,8 @@ class Tracking:
         Active joint-limit constraint rows at each frame.
     limit_steps : int
         Steps with at least one joint-limit row active.
-    limit_joint_steps : dict of str to int
-        Per hinge, steps at which its limit was active (most first).
+    limit_joint_frames : dict of str to int
+        Per hinge, frames at which its limit was active (most first).
     self_contacts : ndarray of int, shape (T,)
         Self-contacts (any depth) at each frame.
     self_depth_m : ndarray, shape (T,)
@@ -110,7 +110,7 @@ class Tracking:
     dof_error_deg: np.ndarray
     limit_rows: np.ndarray
     limit_steps: int
-    limit_joint_steps: dict[str, int]
+    limit_joint_frames: dict[str, int]
     self_contacts: np.ndarray
     self_depth_m: np.ndarray
     torque_peak_nm: np.ndarray
@@ -199,7 +199,7 @@ class Tracking:
             "warnings": dict(self.warnings),
             "warning_messages": list(self.messages),
             "limit_active_steps_pct": round(100 * self.limit_steps / max(self.steps, 1), 2),
-            "limit_joint_steps": dict(self.limit_joint_steps),
+            "limit_joint_frames": dict(self.limit_joint_frames),
             **self.summary(),
         }
 
@@ -367,7 +367,7 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
     torque_peak = np.full(n_frames, np.nan)
     pelvis = np.full(n_frames, np.nan)
     head = np.full(n_frames, np.nan)
-    joint_steps = np.zeros(sim.njnt, dtype=int)
+    joint_frames = np.zeros(sim.njnt, dtype=int)
     limit_steps = 0
     diverged = None
 
@@ -380,7 +380,9 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
             self_contacts[t] = int(inner.sum())
             if inner.any():
                 self_depth[t] = max(0.0, float(-np.asarray(data.contact.dist[:ncon])[inner].min()))
-        limit_rows[t] = int(np.count_nonzero(data.efc_type[:data.nefc] == limit_type))
+        rows = data.efc_type[:data.nefc] == limit_type
+        limit_rows[t] = int(np.count_nonzero(rows))
+        joint_frames[data.efc_id[:data.nefc][rows]] += 1
         torque_peak[t] = float(np.abs(data.actuator_force).max(initial=0.0))
         pelvis[t] = data.xpos[root_body, 2]
         head[t] = data.site_xpos[head_site, 2]
@@ -402,12 +404,8 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
                     data.qvel[free_v] = root_v[k]
                 mujoco.mj_step(sim, data)
                 steps += 1
-                nl = data.nl
-                if nl:
-                    # MuJoCo orders constraint rows: equality, friction, limit, contact.
+                if data.nl:
                     limit_steps += 1
-                    first = data.ne + data.nf
-                    joint_steps[data.efc_id[first:first + nl]] += 1
             bad = any(data.warning[w].number for w in fatal)
             if bad or not np.all(np.isfinite(data.qpos)):
                 diverged = t
@@ -423,13 +421,13 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
     error[simulated] = _wrap_rad(qpos[simulated][:, hinge_q] - ref[simulated][:, hinge_q])
     warnings = {name: int(data.warning[int(getattr(mujoco.mjtWarning, name))].number)
                 for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING"}
-    order = np.argsort(-joint_steps, kind="stable")
+    order = np.argsort(-joint_frames, kind="stable")
     return Tracking(
         mode=mode, fps=float(fps), timestep_s=float(sim.opt.timestep), steps=steps,
         wall_s=wall, hinge_names=layout.names, qpos=qpos,
         dof_error_deg=np.rad2deg(error), limit_rows=limit_rows, limit_steps=limit_steps,
-        limit_joint_steps={joint_names[j].replace("_", ".", 1): int(joint_steps[j])
-                           for j in order if joint_steps[j] > 0},
+        limit_joint_frames={joint_names[j].replace("_", ".", 1): int(joint_frames[j])
+                            for j in order if joint_frames[j] > 0},
         self_contacts=self_contacts, self_depth_m=self_depth, torque_peak_nm=torque_peak,
         pelvis_height_m=pelvis, head_height_m=head, reference_pelvis_height_m=ref_pelvis,
         reference_head_height_m=ref_head, standing_pelvis_m=figures.pelvis_height_m,

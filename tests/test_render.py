@@ -88,3 +88,14 @@ def test_videos_in_each_format(tmp_path, model02, walk_qpos):
     assert Image.open(gif).n_frames == 10
     with pytest.raises(UsageError, match="unknown video format"):
         write_video(model02, qpos, 120.0, tmp_path / "walk.avi")
+
+
+def test_viewer_without_a_display_is_a_clear_error(monkeypatch, model02, walk_qpos):
+    from controller.render import has_display, play_in_viewer
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+    assert not has_display()
+    with pytest.raises(UsageError, match="needs a display"):
+        play_in_viewer(model02, walk_qpos[:5], 120.0)

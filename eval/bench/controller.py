@@ -9,10 +9,13 @@
 - tracking (:func:`controller.tracking.track`, both modes) in physics steps per second
   against a bare loop that feeds ``mj_step`` the same inputs (the plan's targets, and the
   driven root's state) with none of the per-step bookkeeping (limit rows, samples,
-  warnings) — the same physics, so the ratio is the cost of the measuring.
+  warnings) — the same physics, so the ratio is the cost of the measuring;
+- (full run only) the kinematic checks of every frame of every clip, reading included.
 """
 
 from __future__ import annotations
+
+import time
 
 from eval.bench import BenchContext, timeit_best
 
@@ -91,6 +94,16 @@ def run(context: BenchContext) -> dict:
         out[f"tracking_{mode}_steps_per_s"] = result.steps_per_s
         out[f"reference_mj_step_{mode}_per_s"] = plan.steps / raw_s
         out[f"tracking_{mode}_ratio_to_raw"] = result.steps_per_s / (plan.steps / raw_s)
+    if not context.quick:
+        from controller.validity import calibrate
+
+        start = time.perf_counter()
+        calibration = calibrate(catalog)
+        seconds = time.perf_counter() - start
+        frames = calibration.totals()["frames"]
+        out["calibration_all_clips_s"] = seconds
+        out["calibration_frames"] = frames
+        out["calibration_frames_per_s"] = frames / seconds
     return out
 
 
