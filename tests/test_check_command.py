@@ -63,9 +63,15 @@ def test_report_file_and_csv_are_written(tmp_path, data_dir, capsys):
     assert not list(out.parent.glob(".tmp-*"))
 
 
-def test_check_a_split_prints_the_calibration(data_dir, capsys):
-    assert main(["check", "--split", "test", "--data", str(data_dir), "--json"]) == 0
+def test_check_a_split_prints_the_calibration(tmp_path, data_dir, capsys):
+    out = tmp_path / "calibration.json"
+    assert main(["check", "--split", "test", "--data", str(data_dir), "--json",
+                 "--report", str(out)]) == 0
     calibration = json.loads(capsys.readouterr().out)
+    assert json.loads(out.read_text()) == calibration
+    rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+    assert [r["clip"] for r in rows][-2:] == ["total all", "total test"]
+    assert rows[0]["clip"] == "02_01" and int(rows[-1]["frames"]) == 3079
     assert [r["clip"] for r in calibration["clips"]] == [
         "02_01", "02_03", "03_01", "05_11", "16_15", "83_26", "141_04"]
     total = calibration["totals"]

@@ -119,11 +119,7 @@ def run(args) -> int:
         return 0
     calibration = _calibration(reports)
     if args.report:
-        import json
-
-        from upm.fileio import atomic_write_text
-
-        atomic_write_text(args.report, json.dumps(calibration, indent=1) + "\n")
+        _write_calibration(calibration, args.report)
     if args.json:
         print_json(calibration)
     else:
@@ -169,6 +165,25 @@ def _calibration(reports) -> dict:
     return {"schema": "upm-controller/calibration", "schema_version": SCHEMA_VERSION,
             "settings": settings(), "clips": rows, "totals": totals(reports),
             "splits": by_split}
+
+
+def _write_calibration(calibration: dict, path) -> None:
+    """The calibration as JSON at ``path`` and a CSV beside it (one row per clip, then one
+    per total)."""
+    import json
+    from pathlib import Path
+
+    from controller.report import csv_text
+    from upm.fileio import atomic_write_text
+
+    path = Path(path)
+    atomic_write_text(path, json.dumps(calibration, indent=1) + "\n")
+    rows = list(calibration["clips"])
+    rows += [{"clip": f"total {name}", **{k: v for k, v in t.items() if k != "clips"}}
+             for name, t in [("all", calibration["totals"]), *calibration["splits"].items()]]
+    csv_path = path.with_suffix(".csv") if path.suffix != ".csv" else path.with_name(
+        path.name + ".csv")
+    atomic_write_text(csv_path, csv_text(rows))
 
 
 def _print_table(calibration: dict) -> None:
