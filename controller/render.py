@@ -168,6 +168,24 @@ def mark_windows(images, in_window, thickness: int = 8) -> np.ndarray:
     return out
 
 
+def filmstrip_frames(windows, n_frames: int, step: int = 5, margin: int = 2,
+                     limit: int = 16) -> list[int]:
+    """Frames for a filmstrip of transition windows: every ``step``-th frame from
+    ``margin`` steps before each window to ``margin`` steps after it (at most ``limit``,
+    evenly thinned), or evenly spread frames when there is no window."""
+    frames: list[int] = []
+    for window in windows:
+        start, stop, _ = window.indices(n_frames)
+        frames += range(max(0, start - margin * step), min(n_frames, stop + margin * step),
+                        step)
+    if not frames:
+        frames = list(range(0, n_frames, max(1, n_frames // limit)))
+    frames = sorted(set(frames))
+    if len(frames) > limit:
+        frames = [frames[round(i)] for i in np.linspace(0, len(frames) - 1, limit)]
+    return frames
+
+
 def filmstrip(model, rows, frames, path, *, fps: float | None = None, windows=(),
               width: int = 160, height: int = 240, title: str | None = None) -> Path:
     """A PNG of the humanoid at some frames, side by side, one row per trajectory.

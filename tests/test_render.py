@@ -99,3 +99,13 @@ def test_viewer_without_a_display_is_a_clear_error(monkeypatch, model02, walk_qp
     assert not has_display()
     with pytest.raises(UsageError, match="needs a display"):
         play_in_viewer(model02, walk_qpos[:5], 120.0)
+
+
+def test_filmstrip_frames_surround_each_window():
+    from controller.render import filmstrip_frames
+
+    frames = filmstrip_frames([slice(100, 120)], 400)
+    assert frames == list(range(90, 130, 5))
+    assert len(filmstrip_frames([slice(10, 200), slice(250, 390)], 400)) == 16
+    assert filmstrip_frames([], 40, limit=8) == list(range(0, 40, 5))
+    assert max(filmstrip_frames([slice(380, 400)], 400)) < 400
