@@ -75,6 +75,8 @@ def run(*args):
       "--out", "x.amc"], "no transition method 'wiggle'"),
     (["transition", "--from", "02_01", "--to", "02_03", "--method", "linear", "--frames",
       "0", "--out", "x.amc"], "window length"),
+    (["transition", "--from", "02_01", "--to", "02_03", "--method", "linear", "--plot",
+      "f.png", "--plot-dof", "knee.rx", "--out", "x.amc"], "not a posture DOF"),
     (["sequence", "02_01@0:100", "--method", "linear", "--out", "x.amc"], "at least two"),
     (["sequence", "02_01@0:100", "02_03@50:10", "--method", "linear", "--out", "x.amc"],
      "out of range"),

@@ -126,6 +126,12 @@ def run(args) -> int:
 
     if args.context is not None and args.context < 2:
         raise UsageError(f"--context must be at least 2 frames, not {args.context}")
+    if args.plot_dof is not None:
+        from upm.skeleton import POSTURE_DOF_NAMES
+
+        if args.plot_dof not in POSTURE_DOF_NAMES:
+            raise UsageError(f"--plot-dof {args.plot_dof}: not a posture DOF (JOINT.rx/ry/rz, "
+                             f"e.g. rhumerus.rz)")
     catalog = Catalog(args.data)
     source_ref = _single_frame(args.source, "--from")
     target_ref = _single_frame(args.target, "--to")
