@@ -22,3 +22,10 @@ def test_success_replaces_and_creates_directories(tmp_path):
     atomic_write_text(out, "again\n")
     assert out.read_text() == "again\n"
     assert [p.name for p in out.parent.iterdir()] == ["a.txt"]
+
+
+def test_permissions_are_those_of_a_plain_open(tmp_path):
+    plain, atomic = tmp_path / "plain.txt", tmp_path / "atomic.txt"
+    plain.write_text("x")
+    atomic_write_text(atomic, "x")
+    assert atomic.stat().st_mode == plain.stat().st_mode

@@ -23,6 +23,8 @@ from upm.errors import UpmError
 COMMANDS: dict[str, str] = {
     "clips": "upm.commands.clips",
     "bench": "upm.commands.bench",
+    "transition": "upm.commands.transition",
+    "sequence": "upm.commands.sequence",
     "model": "upm.commands.model",
     "check": "upm.commands.check",
 }

@@ -65,3 +65,190 @@ def euler_to_matrix(angles_deg, order: str = "XYZ") -> np.ndarray:
         r = axis_rotation(a[..., _AXIS_INDEX[axis]], axis)
         result = r if result is None else r @ result
     return result
+
+
+def _alternate_euler(angles_deg: np.ndarray, order: str) -> np.ndarray:
+    """The other Tait-Bryan solution of the same rotation: the first and last angles of
+    ``order`` + 180, the middle one 180 - itself. Same layout as the input (X, Y, Z)."""
+    alt = np.array(angles_deg, dtype=float, copy=True)
+    first, middle, last = (_AXIS_INDEX[a] for a in order)
+    alt[..., first] += 180.0
+    alt[..., middle] = 180.0 - alt[..., middle]
+    alt[..., last] += 180.0
+    return alt
+
+
+def _nearest_turn(angles_deg: np.ndarray, near_deg: np.ndarray) -> np.ndarray:
+    """Shift each angle by whole turns to lie within 180 degrees of ``near_deg``."""
+    return angles_deg + 360.0 * np.round((near_deg - angles_deg) / 360.0)
+
+
+def matrix_to_euler_deg(matrix, order: str = "XYZ", near_deg=None) -> np.ndarray:
+    """Euler angles of rotation matrices: the inverse of :func:`euler_to_matrix`.
+
+    A rotation has two Tait-Bryan solutions (and every whole-turn shift of them). Without
+    ``near_deg`` the principal one is returned (middle angle in [-90, 90], the others in
+    [-180, 180]); with it, the solution and turn nearest to ``near_deg`` (per frame, on
+    the circle first, then shifted to lie within 180 degrees of it).
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., 3, 3)
+    order : str
+        The rotation order (first letter applied first), as in :func:`euler_to_matrix`.
+    near_deg : array_like, shape (..., 3), optional
+        Reference angles (about X, Y, Z).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Angles about X, Y, Z in degrees, whatever the order. At gimbal lock (middle angle
+        +-90) the first and last angles are not unique; one valid pair is returned.
+    """
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    m = np.asarray(matrix, dtype=float)
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
+    shape = m.shape[:-2]
+    flat = m.reshape(-1, 3, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # scipy's gimbal-lock warning
+        in_sequence = Rotation.from_matrix(flat).as_euler(order.lower(), degrees=True)
+    angles = np.empty_like(in_sequence)
+    for k, axis in enumerate(order):
+        angles[:, _AXIS_INDEX[axis]] = in_sequence[:, k]
+    angles = angles.reshape(shape + (3,))
+    if near_deg is None:
+        return angles
+    near = np.broadcast_to(np.asarray(near_deg, dtype=float), angles.shape)
+    alt = _alternate_euler(angles, order)
+
+    def distance(candidate):
+        d = np.mod(candidate - near + 180.0, 360.0) - 180.0
+        return np.einsum("...i,...i->...", d, d)
+
+    use_alt = distance(alt) < distance(angles)
+    chosen = np.where(use_alt[..., None], alt, angles)
+    return _nearest_turn(chosen, near)
+
+
+def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
+    """Euler angles of a rotation sequence that change continuously from ``start_deg``.
+
+    Each frame takes the Tait-Bryan solution (of the two) and the whole turn nearest to
+    the previous frame's angles, so a smooth rotation path gives angles without
+    360-degree or branch jumps (except through gimbal lock, where the angles of any
+    representation change fast). Vectorised: the branch of each frame follows from
+    whether the principal solution switches branch between consecutive frames.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (T, 3, 3)
+        Rotations along time.
+    order : str
+        Rotation order, as in :func:`euler_to_matrix`.
+    start_deg : array_like, shape (3,)
+        The angles just before the first frame (about X, Y, Z): the output continues
+        from them.
+
+    Returns
+    -------
+    ndarray, shape (T, 3)
+    """
+    principal = matrix_to_euler_deg(matrix, order)
+    if principal.shape[0] == 0:
+        return principal
+    alt = _alternate_euler(principal, order)
+    start = np.asarray(start_deg, dtype=float)
+
+    def distance(x, y):
+        d = np.mod(x - y + 180.0, 360.0) - 180.0
+        return np.einsum("...i,...i->...", d, d)
+
+    # Branch of frame 0 from the start; afterwards, the principal solution "flips" at t
+    # when its frame-t value is nearer the alternate solution of frame t-1 than the
+    # principal one. The chosen branch is the running parity of the flips.
+    first_alt = distance(alt[0], start) < distance(principal[0], start)
+    flips = distance(principal[1:], alt[:-1]) < distance(principal[1:], principal[:-1])
+    parity = np.concatenate([[first_alt], first_alt ^ (np.cumsum(flips) % 2 == 1)])
+    chosen = np.where(parity[:, None], alt, principal)
+    chained = np.concatenate([start[None], chosen])
+    return np.unwrap(chained, period=360.0, axis=0)[1:]
+
+
+def matrix_to_quaternion(matrix) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)`` of rotation matrices, with ``w >= 0``.
+
+    Shepperd's method (the largest of the four diagonal combinations), vectorised.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+    """
+    m = np.asarray(matrix, dtype=float)
+    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
+    candidates = np.stack([
+        np.stack([1 + m00 + m11 + m22, m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
+                  m[..., 1, 0] - m[..., 0, 1]], axis=-1),
+        np.stack([m[..., 2, 1] - m[..., 1, 2], 1 + m00 - m11 - m22, m[..., 0, 1] + m[..., 1, 0],
+                  m[..., 0, 2] + m[..., 2, 0]], axis=-1),
+        np.stack([m[..., 0, 2] - m[..., 2, 0], m[..., 0, 1] + m[..., 1, 0], 1 - m00 + m11 - m22,
+                  m[..., 1, 2] + m[..., 2, 1]], axis=-1),
+        np.stack([m[..., 1, 0] - m[..., 0, 1], m[..., 0, 2] + m[..., 2, 0],
+                  m[..., 1, 2] + m[..., 2, 1], 1 - m00 - m11 + m22], axis=-1),
+    ], axis=-2)  # (..., 4 candidates, 4): candidate i has component i = 4 q_i^2 / ...
+    diagonal = np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22,
+                         1 - m00 - m11 + m22], axis=-1)
+    best = np.argmax(diagonal, axis=-1)
+    q = np.take_along_axis(candidates, best[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def rotation_log(matrix) -> np.ndarray:
+    """Rotation vectors (axis times angle, radians, angle in [0, pi]) of rotation matrices.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+    """
+    q = matrix_to_quaternion(matrix)
+    sine = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(sine, q[..., :1])
+    # angle / sin(angle / 2) -> 2 as the angle -> 0.
+    scale = np.where(sine > 1e-12, angle / np.where(sine > 1e-12, sine, 1.0), 2.0)
+    return scale * q[..., 1:]
+
+
+def rotation_exp(rotvec) -> np.ndarray:
+    """Rotation matrices of rotation vectors (radians): Rodrigues' formula.
+
+    Parameters
+    ----------
+    rotvec : array_like, shape (..., 3)
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+    """
+    v = np.asarray(rotvec, dtype=float)
+    theta = np.linalg.norm(v, axis=-1)[..., None, None]
+    k = np.zeros(v.shape[:-1] + (3, 3))
+    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    small = theta < 1e-8
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    return np.eye(3) + a * k + b * (k @ k)

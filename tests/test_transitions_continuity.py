@@ -1,0 +1,97 @@
+"""Every method joins real clips without a jump at both window edges — positions (C0) for
+all, velocities too (C1) where the method promises it — including across the +-180 wrap.
+
+The checks are in tests/transition_data.py (with their tolerances and why). ``upm`` and
+``som`` run with the classnn source standing in for the trained maps (same code path:
+only the key posture's origin differs).
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from tests.transition_data import PAIRS, Anonymous, pair, sources, window_edges
+from upm.angles import angle_diff_deg
+from upm.skeleton import POSTURE_DOF_NAMES
+from upm.transitions import METHODS, ClassNearest, NearestPosture, transition
+
+PROMISES = {"upm": "C1", "som": "C1", "classnn": "C1", "snap": "C1", "linear": "C0",
+            "slerp": "C0", "inertialize": "C1", "spacetime": "C1"}
+
+
+def test_every_method_states_its_continuity():
+    assert {name: m.continuity for name, m in METHODS.items()} == PROMISES
+
+
+def _run(data_dir, method, before, after, frames=20):
+    source = sources(data_dir).get(method) if METHODS[method].needs_key_source else None
+    return transition(method, before, after, frames, 0.5, source)
+
+
+FAST = [m for m in METHODS if m != "spacetime"]
+
+
+@pytest.mark.parametrize("index", range(len(PAIRS)))
+def test_joins_on_real_pairs(data_dir, index):
+    before, after = pair(data_dir, index)
+    for method in FAST + (["spacetime"] if index < 2 else []):
+        result = _run(data_dir, method, before, after)
+        (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
+        assert c0_a <= 0 and c0_b <= 0, (method, PAIRS[index], c0_a, c0_b)
+        if METHODS[method].continuity == "C1":
+            assert c1_a <= 0 and c1_b <= 0, (method, PAIRS[index], c1_a, c1_b)
+
+
+def test_the_velocity_check_catches_a_linear_blend(data_dir):
+    """The C1 check can fail: the linear blend's velocity jump fails it on real pairs."""
+    failures = 0
+    for index in range(len(PAIRS)):
+        before, after = pair(data_dir, index)
+        (_, c1_a), (_, c1_b) = window_edges(_run(data_dir, "linear", before, after))
+        failures += (c1_a > 0) + (c1_b > 0)
+    assert failures >= len(PAIRS)
+
+
+def test_the_position_check_catches_a_jump(data_dir):
+    before, after = pair(data_dir, 0)
+    result = _run(data_dir, "classnn", before, after)
+    window = result.window
+    shifted = result.motion.posture_deg.copy()
+    shifted[window, POSTURE_DOF_NAMES.index("lfemur.rx")] += 3.0  # a 3-degree jump
+    broken = result.motion.replace(posture_deg=shifted)
+    (c0_a, _), (c0_b, _) = window_edges(dataclasses.replace(result, motion=broken))
+    assert c0_a > 0 and c0_b > 0
+
+
+def _wrap_pair(data_dir):
+    """A real pair with one slowly moving DOF moved to sit at +175 at A and -175 at B."""
+    before, after = pair(data_dir, 0)
+    declared = np.flatnonzero(before.skeleton.declared)
+    speed = (np.abs(np.diff(before.posture_deg[-3:, declared], axis=0)).max(axis=0)
+             + np.abs(np.diff(after.posture_deg[:3, declared], axis=0)).max(axis=0))
+    dof = declared[np.argmin(speed)]
+    p1, p2 = before.posture_deg.copy(), after.posture_deg.copy()
+    p1[:, dof] += 175.0 - p1[-1, dof]
+    p2[:, dof] += -175.0 - p2[0, dof]
+    return before.replace(posture_deg=p1), after.replace(posture_deg=p2), dof
+
+
+@pytest.mark.parametrize("method", list(METHODS))
+def test_joins_across_the_wrap(data_dir, method):
+    before, after, dof = _wrap_pair(data_dir)
+    # Key sources that know postures near +-180 in that DOF: fitted on the two clips.
+    own = np.concatenate([before.posture_deg, after.posture_deg])
+    kind = METHODS[method].key_kind
+    source = {"classnn": ClassNearest(own), "snap": NearestPosture(own)}.get(kind)
+    if kind in ("upm", "som"):
+        source = Anonymous(ClassNearest(own))
+    result = transition(method, before, after, 20, 0.5, source)
+    (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
+    assert c0_a <= 0 and c0_b <= 0
+    if METHODS[method].continuity == "C1":
+        assert c1_a <= 0 and c1_b <= 0
+    # The short way: 10 degrees through 180, never back through 0.
+    window = result.window_posture_deg[:, dof]
+    assert np.all(np.abs(angle_diff_deg(window, 180.0)) < 45.0), window
+    assert np.all((window >= -180.0) & (window < 180.0))  # wrapped, as documented

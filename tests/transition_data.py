@@ -1,0 +1,108 @@
+"""Shared material for the transition tests: real clip pairs, key-posture sources fitted
+once per process, and the continuity checks of the window's edges."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from upm.angles import angle_diff_deg
+from upm.catalog import Catalog
+
+#: Real pairs (clip 1, frame A, clip 2, frame B): a walk into a run, a walk into a dance
+#: of another subject, a 60 fps salsa into a walk (resampled), a karate kata whose root
+#: Euler angles pass 1000 degrees into a 60 fps jump (two subjects, resampled), a swordplay
+#: into a punch.
+PAIRS = (
+    ("02_01", 200, "02_03", 20),
+    ("05_01", 300, "16_15", 100),
+    ("60_10", 400, "35_01", 50),
+    ("135_06", 1500, "141_04", 150),
+    ("02_07", 900, "02_05", 700),
+)
+
+#: Frames of each clip around the join (enough context for every method).
+CLIP_FRAMES = 40
+
+
+class Anonymous:
+    """A key-posture source without a ``kind``: lets the ``upm`` and ``som`` methods run
+    on the classnn source until the trained maps are merged."""
+
+    def __init__(self, source):
+        self._source = source
+
+    def key_posture(self, a_deg, b_deg, alpha=0.5):
+        return self._source.key_posture(a_deg, b_deg, alpha)
+
+
+@functools.lru_cache(maxsize=2)
+def catalog_of(data_dir) -> Catalog:
+    return Catalog(data_dir)
+
+
+@functools.lru_cache(maxsize=2)
+def sources(data_dir) -> dict:
+    """Key-posture source per key method: classnn and snap fitted on the train split (every
+    2nd frame: enough, and half the fitting time); upm and som stand-ins (see Anonymous)."""
+    from upm.transitions import ClassNearest, NearestPosture, training_postures
+
+    postures = training_postures(catalog_of(data_dir), "train", step=2)
+    classnn = ClassNearest(postures)
+    return {"classnn": classnn, "snap": NearestPosture(postures), "upm": Anonymous(classnn),
+            "som": Anonymous(classnn)}
+
+
+def pair(data_dir, index: int, frames: int = CLIP_FRAMES):
+    """Clip 1 ending at A and clip 2 starting at B of ``PAIRS[index]``."""
+    catalog = catalog_of(data_dir)
+    name1, a, name2, b = PAIRS[index]
+    before = catalog.load(name1).frames(a + 1 - frames, a + 1)
+    after = catalog.load(name2).frames(b, b + frames)
+    return before, after
+
+
+# --- continuity at a window edge ----------------------------------------------------------
+#
+# At an edge, the real frame R (A, or B) meets the new frame next to it. With frames taken
+# outward from the window, s0 = step across the join, s-1 / s1 = the steps on either side;
+# d(k) = the change of step (discrete acceleration) centred on frame k, R at 0.
+#
+# C0 (no jump): |s0| <= max(|s-1|, |s1|) + max |d| over the frames *not touching* the join
+#   (-2, -1 on the clip side, 2, 3 on the window side) + 0.05 deg. A smooth curve's step
+#   can differ from its neighbours' by no more than the accelerations around it; a jump
+#   adds its whole size to s0. The 0.05 deg absorbs slerp's uneven Euler speed (measured
+#   up to 0.02 deg on 25 random real pairs).
+# C1 (no velocity jump): |d(0)| <= 2 max(|d(-1)|, |d(1)|) + 0.1 deg/frame^2: the
+#   acceleration at the join is not an outlier among its neighbours. 0.1 deg/frame^2 is
+#   about the median |d| of the CMU clips (0.02-0.3: mocap noise); a linear blend's velocity
+#   jump shows here as 5-15 deg/frame^2 on real pairs.
+
+
+def _edge_frames(motion, real_index: int, direction: int, dofs) -> np.ndarray:
+    """Frames R-4d .. R+5d (d = direction: +1 from A into the window, -1 from B back into
+    it), unwrapped: shape (10, n)."""
+    index = real_index + direction * np.arange(-4, 6)
+    seg = motion.posture_deg[index][:, dofs]
+    return seg[0] + np.cumsum(np.vstack([np.zeros(seg.shape[1]),
+                                         angle_diff_deg(seg[1:], seg[:-1])]), axis=0)
+
+
+def edge_excess(motion, real_index: int, direction: int, dofs) -> tuple[float, float]:
+    """(C0 excess, C1 excess) at one edge, max over DOFs: > 0 means the check fails."""
+    x = _edge_frames(motion, real_index, direction, dofs)
+    s = np.diff(x, axis=0)  # s[k]: from frame k-4 to k-3 (relative to R): join step s[4]
+    d = np.diff(s, axis=0)  # d[k]: centred on frame k-3: join acceleration d[3]
+    far = np.max(np.abs(d[[1, 2, 5, 6]]), axis=0)
+    c0 = np.abs(s[4]) - np.maximum(np.abs(s[3]), np.abs(s[5])) - far - 0.05
+    c1 = np.abs(d[3]) - 2.0 * np.maximum(np.abs(d[2]), np.abs(d[4])) - 0.1
+    return float(c0.max()), float(c1.max())
+
+
+def window_edges(transition):
+    """((C0, C1) excess at A, (C0, C1) excess at B) over the declared DOFs."""
+    dofs = np.flatnonzero(transition.motion.skeleton.declared)
+    at_a = edge_excess(transition.motion, transition.a_index, +1, dofs)
+    at_b = edge_excess(transition.motion, transition.b_index, -1, dofs)
+    return at_a, at_b

@@ -1,0 +1,74 @@
+"""Join a sequence of clip pieces into one continuous motion and write it as an AMC.
+
+Each piece is CLIP (the whole clip), CLIP@A:B (frames A to B-1, 0-based) or CLIP@F (one
+frame, a held pose); a transition of --frames new frames joins each consecutive pair.
+Pieces of different frame rates are resampled to the first piece's (or --fps); pieces of
+different subjects are allowed: postures are joint angles, and the result uses the first
+piece's skeleton, with each later piece's root translation scaled by the ratio of leg
+lengths.
+
+Example:
+  upm sequence 02_01@0:200 02_03@20:150 05_01@100:400 --method classnn --out seq.amc
+"""
+
+from __future__ import annotations
+
+HELP = "join clips (CLIP@A:B ...) with transitions into one AMC"
+
+
+def configure(parser) -> None:
+    from upm.commands.common import add_data_argument
+    from upm.commands.transition import add_method_arguments
+
+    add_data_argument(parser)
+    parser.add_argument("pieces", nargs="+", metavar="CLIP@A:B",
+                        help="the pieces, in order (at least two)")
+    add_method_arguments(parser)
+    parser.add_argument("--fps", type=float, default=None,
+                        help="frame rate of the result (default: the first piece's)")
+    parser.add_argument("--out", required=True, metavar="OUT.amc", help="the AMC to write")
+    parser.add_argument("--json", metavar="FILE.json", default=None,
+                        help="also write where each piece and window lies, and the timing")
+
+
+def run(args) -> int:
+    import json
+
+    from upm.amc import write_amc
+    from upm.catalog import Catalog, parse_clip_ref
+    from upm.errors import UsageError
+    from upm.fileio import atomic_write_text
+    from upm.progress import progress
+    from upm.transitions import build_sequence
+    from upm.transitions.load import key_source_for
+
+    if len(args.pieces) < 2:
+        raise UsageError("a sequence needs at least two pieces (CLIP@A:B CLIP@A:B ...)")
+    catalog = Catalog(args.data)
+    refs = [parse_clip_ref(text) for text in args.pieces]
+    pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
+    key_source = key_source_for(args.method, args.map, catalog)
+    sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
+                              fps=args.fps, align_heading=args.align_heading)
+    write_amc(args.out, sequence.motion)
+    motion = sequence.motion
+    report = {
+        "method": sequence.method, "frames": sequence.frames, "alpha": args.alpha,
+        "fps": motion.fps, "out": str(args.out), "out_frames": motion.n_frames,
+        "asf": str(catalog.info(refs[0].name).asf_path),
+        "pieces": [{"clip": str(ref), "first_frame": s.start, "stop_frame": s.stop}
+                   for ref, s in zip(refs, sequence.pieces, strict=True)],
+        "windows": [{"first_frame": w.start, "stop_frame": w.stop, "seconds": sec}
+                    for w, sec in zip(sequence.windows, sequence.seconds, strict=True)],
+    }
+    if args.json:
+        atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
+    print(f"wrote {args.out}: {motion.n_frames} frames at {motion.fps:g} fps "
+          f"(ASF {report['asf']}), method {sequence.method}, {sequence.frames}-frame windows")
+    for piece in report["pieces"]:
+        print(f"  {piece['clip']:<18} frames {piece['first_frame']}-{piece['stop_frame'] - 1}")
+    for i, window in enumerate(report["windows"], start=1):
+        print(f"  window {i:<11} frames {window['first_frame']}-{window['stop_frame'] - 1}"
+              f"  ({1e3 * window['seconds']:.2f} ms)")
+    print("(frame numbers 0-based; AMC frame numbers are one more)")
+    return 0

@@ -1,0 +1,164 @@
+"""Join two clips with a transition (paper section 3.2) and write a playable AMC.
+
+Clip 1 ends at --from CLIP@F (frame F, 0-based; default its last frame) and clip 2 starts
+at --to CLIP@F (default its first frame); the window of --frames new frames lies between
+them. The AMC holds --context frames of each clip around the window (default one second)
+and uses clip 1's skeleton (its ASF). Clip 2 is resampled to clip 1's frame rate if they
+differ, turned about the vertical so its heading continues clip 1's, and moved to
+continue where the window ends.
+
+Methods (--method): upm (default; the paper: UPM key posture + cubic B-spline; needs
+--map), som (needs a SOM --map), classnn and snap (key posture from the nearest training
+postures of --data's train split: no map needed), linear, slerp, inertialize, spacetime.
+
+Examples:
+  upm transition --map upm.npz --from 02_01@200 --to 02_03@20 --out walk-run.amc
+  upm transition --method linear --from 05_01 --to 05_11 --out lin.amc --json lin.json
+"""
+
+from __future__ import annotations
+
+HELP = "join two clips with a transition and write an AMC (and JSON)"
+
+
+def add_method_arguments(parser, default_method: str = "upm") -> None:
+    """--method, --map, --alpha, --frames, --no-align: shared with ``upm sequence``."""
+    parser.add_argument("--method", default=default_method, metavar="M",
+                        help="upm, som, classnn, snap, linear, slerp, inertialize, spacetime "
+                             f"(default: {default_method})")
+    parser.add_argument("--map", metavar="MAP.npz", default=None,
+                        help="trained posture map (upm train), needed by --method upm/som")
+    parser.add_argument("--alpha", type=float, default=0.5,
+                        help="key-posture ratio in [0, 1]: 0 is A, 1 is B (default 0.5)")
+    parser.add_argument("--frames", type=int, default=20, metavar="L",
+                        help="window length in new frames (default 20, the paper's at 120 fps)")
+    parser.add_argument("--no-align", dest="align_heading", action="store_false",
+                        help="do not turn the next clip about the vertical to continue the "
+                             "previous clip's heading")
+
+
+def configure(parser) -> None:
+    from upm.commands.common import add_data_argument
+
+    add_data_argument(parser)
+    parser.add_argument("--from", dest="source", required=True, metavar="CLIP[@FRAME]",
+                        help="clip 1, ending at FRAME (0-based; default its last frame)")
+    parser.add_argument("--to", dest="target", required=True, metavar="CLIP[@FRAME]",
+                        help="clip 2, starting at FRAME (default 0)")
+    add_method_arguments(parser)
+    parser.add_argument("--context", type=int, default=None, metavar="N",
+                        help="frames of each clip kept in the AMC around the window "
+                             "(default: one second)")
+    parser.add_argument("--out", required=True, metavar="OUT.amc", help="the AMC to write")
+    parser.add_argument("--json", metavar="FILE.json", default=None,
+                        help="also write the window's postures, root and timing as JSON")
+    parser.add_argument("--plot", metavar="FIG.png", default=None,
+                        help="also plot one DOF across the window, this method vs linear "
+                             "(the paper's Fig. 13)")
+    parser.add_argument("--plot-dof", metavar="JOINT.AXIS", default=None,
+                        help="the DOF to plot, e.g. rhumerus.rz (default: the right shoulder "
+                             "DOF where the method and linear differ most)")
+
+
+def _single_frame(text: str, option: str):
+    from upm.catalog import parse_clip_ref
+    from upm.errors import UsageError
+
+    ref = parse_clip_ref(text)
+    if ref.has_range:
+        raise UsageError(f"{option} {text}: give CLIP or CLIP@FRAME (one frame), not a range")
+    return ref
+
+
+def _clip_window(catalog, ref, role: str, context: int | None):
+    """Clip 1 up to its frame (role "from") or clip 2 from its frame (role "to")."""
+    from upm.errors import UsageError
+
+    motion = catalog.load(ref.name)
+    n = motion.n_frames
+    keep = context if context is not None else max(1, round(motion.fps))
+    if role == "from":
+        end = n - 1 if ref.start is None else (ref.start + n if ref.start < 0 else ref.start)
+        if not 0 <= end < n:
+            raise UsageError(f"--from {ref}: frame out of range (clip {ref.name} has {n} "
+                             f"frames, numbered 0 to {n - 1})")
+        return motion.frames(max(0, end + 1 - keep), end + 1), end
+    start = 0 if ref.start is None else (ref.start + n if ref.start < 0 else ref.start)
+    if not 0 <= start < n:
+        raise UsageError(f"--to {ref}: frame out of range (clip {ref.name} has {n} frames, "
+                         f"numbered 0 to {n - 1})")
+    return motion.frames(start, min(n, start + keep)), start
+
+
+def window_report(result, fps: float) -> dict:
+    """The JSON description of a transition's window."""
+    from upm.skeleton import POSTURE_DOF_NAMES
+
+    key = result.key_posture_deg
+    return {
+        "method": result.method,
+        "frames": result.frames,
+        "alpha": result.alpha,
+        "fps": fps,
+        "window_first_frame": result.window.start,
+        "window_stop_frame": result.window.stop,
+        "key_time_frames_after_a": result.key_time,
+        "heading_turn_deg": result.heading_turn_deg,
+        "seconds": result.seconds,
+        "diagnostics": dict(result.diagnostics),
+        "dof_names": list(POSTURE_DOF_NAMES),
+        "root_channels": ["tx_m", "ty_m", "tz_m", "rx_deg", "ry_deg", "rz_deg"],
+        "window_posture_deg": result.window_posture_deg.round(6).tolist(),
+        "window_root": result.window_root.round(6).tolist(),
+        "key_posture_deg": None if key is None else key.round(6).tolist(),
+    }
+
+
+def run(args) -> int:
+    import json
+
+    from upm.amc import write_amc
+    from upm.catalog import Catalog
+    from upm.errors import UsageError
+    from upm.fileio import atomic_write_text
+    from upm.transitions import transition
+    from upm.transitions.load import key_source_for
+
+    if args.context is not None and args.context < 2:
+        raise UsageError(f"--context must be at least 2 frames, not {args.context}")
+    if args.plot_dof is not None:
+        from upm.skeleton import POSTURE_DOF_NAMES
+
+        if args.plot_dof not in POSTURE_DOF_NAMES:
+            raise UsageError(f"--plot-dof {args.plot_dof}: not a posture DOF (JOINT.rx/ry/rz, "
+                             f"e.g. rhumerus.rz)")
+    catalog = Catalog(args.data)
+    source_ref = _single_frame(args.source, "--from")
+    target_ref = _single_frame(args.target, "--to")
+    before, a_frame = _clip_window(catalog, source_ref, "from", args.context)
+    after, b_frame = _clip_window(catalog, target_ref, "to", args.context)
+    key_source = key_source_for(args.method, args.map, catalog)
+    result = transition(args.method, before, after, args.frames, args.alpha, key_source,
+                        align_heading=args.align_heading)
+    write_amc(args.out, result.motion)
+    report = window_report(result, result.motion.fps)
+    report.update({"from": f"{source_ref.name}@{a_frame}", "to": f"{target_ref.name}@{b_frame}",
+                   "out": str(args.out), "out_frames": result.motion.n_frames,
+                   "asf": str(catalog.info(source_ref.name).asf_path)})
+    if args.json:
+        atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
+    if args.plot:
+        from eval.figures import plot_window_dof
+
+        linear = result if args.method == "linear" else transition(
+            "linear", before, after, args.frames, args.alpha, align_heading=args.align_heading)
+        plot_window_dof(args.plot, {args.method: result, "linear": linear}, dof=args.plot_dof,
+                        title=f"{report['from']} -> {report['to']}")
+    w = result.window
+    print(f"{args.method}: {report['from']} -> {report['to']}, {result.frames} frames at "
+          f"{result.motion.fps:g} fps, alpha {result.alpha:g}, heading turn "
+          f"{result.heading_turn_deg:+.1f} deg")
+    print(f"wrote {args.out}: {result.motion.n_frames} frames (ASF {report['asf']}); window = "
+          f"frames {w.start}-{w.stop - 1} (0-based; AMC frame numbers {w.start + 1}-{w.stop})")
+    print(f"transition computed in {1e3 * result.seconds:.2f} ms")
+    return 0

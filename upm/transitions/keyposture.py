@@ -1,0 +1,69 @@
+"""The key-posture methods (paper section 3.2): ``upm``, ``som``, ``classnn``, ``snap``.
+
+All four build the window the same way and differ only in where the key posture comes
+from (a :class:`~upm.transitions.base.KeyPostureSource`):
+
+1. the key posture K = ``source.key_posture(A, B, alpha)`` (paper section 3.1);
+2. K is placed on the turn of the circle nearest the alpha-point of A->B (so that a DOF
+   crossing +-180 does not go the long way round);
+3. a cubic B-spline passes through the last ``SPLINE_CONTEXT`` frames of clip 1 (up to
+   A), K at the window's middle ``t = (L + 1) / 2``, and the first ``SPLINE_CONTEXT``
+   frames of clip 2 (from B), all unwrapped along time; the window is the spline at
+   ``t = 1 .. L``.
+
+Continuity: C1 at both edges (the spline is C2 and passes through the clip frames on
+both sides of each join). At alpha = 0.5 and odd L the middle window frame is K exactly;
+for even L the middle falls between two frames and the spline passes through K there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from upm.angles import angle_diff_deg, wrap_deg
+from upm.errors import UsageError
+from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
+from upm.transitions.spline import keyframe_spline
+
+
+def key_posture_unwrapped(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray]:
+    """The key posture, wrapped and on the turn nearest the alpha-point of A->B.
+
+    Returns
+    -------
+    key_wrapped, key_continuous : ndarray, shape (63,)
+    """
+    source = problem.key_source
+    key = np.asarray(source.key_posture(wrap_deg(problem.a_deg), wrap_deg(problem.b_deg),
+                                        problem.alpha), dtype=float)
+    if key.shape != problem.a_deg.shape or not np.isfinite(key).all():
+        raise UsageError(f"the key-posture source {type(source).__name__} returned "
+                         f"{key.shape} values (expected 63 finite degrees)")
+    point = problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg)
+    return wrap_deg(key), point + angle_diff_deg(key, point)
+
+
+def solve(problem: WindowProblem) -> WindowResult:
+    key_wrapped, key = key_posture_unwrapped(problem)
+    times = np.concatenate([problem.before_times, [problem.key_time], problem.after_times])
+    values = np.concatenate([problem.before_deg, key[None], problem.after_deg])
+    window = keyframe_spline(times, values, problem.window_times)
+    c = problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg)
+    return WindowResult(window, key_posture_deg=key_wrapped, diagnostics={
+        "key_distance_to_alpha_point_deg": float(np.sqrt(np.sum((key - c) ** 2))),
+    })
+
+
+def _method(kind: str, summary: str) -> TransitionMethod:
+    return TransitionMethod(name=kind, solve=solve, continuity="C1", key_kind=kind,
+                            summary=summary)
+
+
+UPM = _method("upm", "the paper's method: UPM key posture at the middle, cubic B-spline "
+                     "through clip frames and key (needs a trained map)")
+SOM = _method("som", "as upm, with the key posture from a classic fixed-grid SOM (the paper's "
+                     "foil; needs a trained SOM)")
+CLASSNN = _method("classnn", "as upm, with each class's key sub-posture the nearest training "
+                             "sub-posture (ablation: no map learned)")
+SNAP = _method("snap", "as upm, with the key posture the whole-body nearest training posture "
+                       "(ablation)")

@@ -1,0 +1,174 @@
+"""The root across a transition (paper section 3.2), shared by every method.
+
+- **Horizontal position** (tx, tz): the paper's velocity blend. Clip 1's velocity v1 at A
+  (its last step) and clip 2's v2 at B (its first step, after the turn below) are blended
+  linearly over the L + 1 steps from A to B and integrated: step i (i = 1 .. L+1) is
+  ``v1 (1 - w_i) + v2 w_i`` with ``w_i = (i - 1) / L``, so the first step out of A is
+  exactly clip 1's last step and the last step into B exactly clip 2's first step
+  (positions and velocities join, C1). Clip 2 is then moved to start where the blend
+  ends: the paper's ``p(t) = p(t2) + n(t)``.
+- **Heading**: beyond the paper (it says nothing on the subject), clip 2 is turned about
+  the vertical (ASF y) axis, positions and orientation, so that its heading at B equals
+  clip 1's heading at A. Heading is the twist about y of the root orientation
+  (``R = Ry(heading) S`` with S about a horizontal axis); it is undefined only for a
+  body upside down. Can be switched off (``align_heading=False``).
+- **Height** (ty) and **orientation**: the paper's "linear interpolation smoothed by the
+  B-spline": the key value at the window's middle is the linear interpolation at alpha
+  between A and B (height: ``ty_A + alpha (ty_B - ty_A)``; orientation: the slerp), and
+  a cubic B-spline passes through the last frames of clip 1, that key and the first
+  frames of clip 2. The orientation spline runs in rotation-vector space around the key
+  orientation (not on the Euler angles: the CMU root order XYZ is in gimbal lock
+  whenever the body faces +-x, and the clips' own Euler angles reach 1251 degrees).
+  The window's and clip 2's Euler angles are then written continuing from A's (no
+  360-degree or branch jumps).
+- **Other subjects**: clip 2's root translation is scaled by the ratio of the subjects'
+  leg lengths (rest-pose root height above the lowest bone end), so that with clip 1's
+  skeleton its feet stay near the floor and its steps match the legs (see
+  :func:`leg_length_m`).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from upm.angles import wrap_deg
+from upm.rotations import (
+    axis_rotation,
+    continuous_euler_deg,
+    euler_to_matrix,
+    matrix_to_quaternion,
+    rotation_exp,
+    rotation_log,
+)
+from upm.skeleton import Skeleton
+from upm.transitions.spline import SPLINE_CONTEXT, keyframe_spline
+
+_HORIZONTAL = [0, 2]
+
+
+@dataclass(frozen=True)
+class RootBlend:
+    """The root of a transition.
+
+    Attributes
+    ----------
+    window : ndarray, shape (L, 6)
+        The window's root: tx, ty, tz metres, rx, ry, rz degrees.
+    after : ndarray, shape (T2, 6)
+        Clip 2's root, turned and moved to continue from the window.
+    heading_turn_deg : float
+        The turn about the vertical applied to clip 2.
+    """
+
+    window: np.ndarray
+    after: np.ndarray
+    heading_turn_deg: float
+
+
+def heading_deg(matrix) -> np.ndarray:
+    """Heading of root orientations: the twist about the vertical (y) axis.
+
+    Parameters
+    ----------
+    matrix : array_like, shape (..., 3, 3)
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Degrees in [-180, 180): the angle theta of ``R = Ry(theta) S`` where S turns
+        about a horizontal axis.
+    """
+    q = matrix_to_quaternion(matrix)  # w, x, y, z with w >= 0
+    return wrap_deg(2.0 * np.degrees(np.arctan2(q[..., 2], q[..., 0])))
+
+
+@functools.lru_cache(maxsize=32)
+def leg_length_m(skeleton: Skeleton) -> float:
+    """Rest-pose height of the root above the skeleton's lowest bone end, metres.
+
+    CMU captures put the floor near y = 0, with the standing root at about this height
+    (0.80-0.97 m over the 12 subjects here).
+    """
+    from upm.kinematics import rest_positions
+
+    return float(-rest_positions(skeleton)[:, 1].min())
+
+
+def _slerp(r0: np.ndarray, r1: np.ndarray, s: float) -> np.ndarray:
+    return r0 @ rotation_exp(s * rotation_log(r0.T @ r1))
+
+
+def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
+               align_heading: bool = True, context: int = SPLINE_CONTEXT) -> RootBlend:
+    """The root of the window, and clip 2's root re-anchored after it.
+
+    Parameters
+    ----------
+    before_root : array_like, shape (T1, 6)
+        Clip 1's root (T1 >= 1), ending at A.
+    after_root : array_like, shape (T2, 6)
+        Clip 2's root (T2 >= 1), starting at B (same frame rate and scale as clip 1).
+    frames : int
+        L >= 1.
+    alpha : float
+        Where the key orientation and height sit between A and B (0 is A, 1 is B).
+    order : str
+        The root's rotation order (``skeleton.root_axis_order``).
+    align_heading : bool
+        Turn clip 2 about the vertical so its heading at B is clip 1's at A.
+    context : int
+        Frames of each clip the height and orientation splines pass through.
+
+    Returns
+    -------
+    RootBlend
+    """
+    before = np.asarray(before_root, dtype=float)
+    after = np.asarray(after_root, dtype=float)
+    n_steps = frames + 1
+    k1, k2 = min(context, before.shape[0]), min(context, after.shape[0])
+
+    rot_before = euler_to_matrix(before[-k1:, 3:], order)
+    rot_after = euler_to_matrix(after[:, 3:], order)
+    turn = 0.0
+    if align_heading:
+        turn = float(wrap_deg(heading_deg(rot_before[-1]) - heading_deg(rot_after[0])))
+    turn_matrix = axis_rotation(turn, "Y")
+    rot_after = turn_matrix @ rot_after
+
+    # Clip 2's translation relative to B, turned with it.
+    relative = (after[:, :3] - after[0, :3]) @ turn_matrix.T
+    v1 = before[-1, _HORIZONTAL] - before[-2, _HORIZONTAL] if before.shape[0] > 1 else 0.0
+    v2 = relative[1, _HORIZONTAL] if after.shape[0] > 1 else 0.0
+    w = np.arange(n_steps) / frames
+    steps = (1.0 - w)[:, None] * v1 + w[:, None] * v2
+    path = before[-1, _HORIZONTAL] + np.cumsum(steps, axis=0)  # (L+1, 2): window, then B
+
+    window = np.empty((frames, 6))
+    window[:, _HORIZONTAL] = path[:frames]
+    new_after = np.empty_like(after)
+    new_after[:, _HORIZONTAL] = path[frames] + relative[:, _HORIZONTAL]
+    new_after[:, 1] = after[:, 1]
+
+    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
+    query = np.arange(1, frames + 1, dtype=float)
+
+    key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
+    heights = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
+    window[:, 1] = keyframe_spline(times, heights[:, None], query)[:, 0]
+
+    key_rot = _slerp(rot_before[-1], rot_after[0], alpha)
+    context_rots = np.concatenate([rot_before, rot_after[:k2]])
+    vectors = rotation_log(key_rot.T @ context_rots)
+    vectors = np.concatenate([vectors[:k1], np.zeros((1, 3)), vectors[k1:]])
+    window_vectors = keyframe_spline(times, vectors, query)
+    window_rots = key_rot @ rotation_exp(window_vectors)
+
+    euler = continuous_euler_deg(np.concatenate([window_rots, rot_after]), order,
+                                 before[-1, 3:])
+    window[:, 3:] = euler[:frames]
+    new_after[:, 3:] = euler[frames:]
+    return RootBlend(window=window, after=new_after, heading_turn_deg=turn)
