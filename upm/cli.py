@@ -27,6 +27,7 @@ COMMANDS: dict[str, str] = {
     "sequence": "upm.commands.sequence",
     "model": "upm.commands.model",
     "check": "upm.commands.check",
+    "simulate": "upm.commands.simulate",
 }
 
 

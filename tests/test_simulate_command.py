@@ -1,0 +1,91 @@
+"""``upm simulate``: a sequence of real clips joined by transitions drives the humanoid;
+the report marks the windows and pieces, the CSV has a row per part, --video writes a
+playable file offscreen; bad input is a one-line error."""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from upm.cli import main
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("UPM_CACHE", str(tmp_path_factory.getbasetemp() / "simulate-cache"))
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory, data_dir):
+    out = tmp_path_factory.mktemp("simulate")
+    os.environ.setdefault("UPM_CACHE", str(out / "cache"))
+    code = main(["simulate", "--data", str(data_dir), "--method", "linear",
+                 "--sequence", "02_01@0:90", "02_02@30:100", "--frames", "20",
+                 "--report", str(out / "r.json"), "--video", str(out / "r.gif")])
+    assert code == 0
+    return out
+
+
+def test_report_marks_windows_and_pieces(simulated):
+    report = json.loads((simulated / "r.json").read_text())
+    assert report["kind"] == "simulate"
+    assert report["sequence"]["method"] == "linear"
+    assert report["sequence"]["pieces"] == ["02_01@0:90", "02_02@30:100"]
+    assert report["motion"]["frames"] == 90 + 20 + 70
+    (window,) = report["windows"]
+    assert (window["start"], window["stop"]) == (90, 110)
+    assert window["from"] == "02_01@0:90" and window["to"] == "02_02@30:100"
+    assert [p["name"] for p in report["pieces"]] == ["02_01@0:90", "02_02@30:100"]
+    assert [(p["start"], p["stop"]) for p in report["pieces"]] == [(0, 90), (110, 180)]
+    frames = report["frames"]
+    assert [f["window"] for f in frames[89:91]] == [None, 0]
+    assert "added_excess_max_deg" in frames[100]
+    for mode in ("driven", "free"):
+        run = report["totals"]["tracking"][mode]
+        assert run["warnings"] == {} and run["diverged_frame"] is None
+        assert f"{mode}_error_deg" in frames[50]
+    assert "free_window" in window["tracking"]
+    # Before the window the servos follow the walk closely (as on the clip alone); the
+    # linear blend then dips a foot 5 cm into the floor (measured), which the floor
+    # pushes back: the window is flagged for it.
+    assert report["pieces"][0]["tracking"]["driven"]["error_deg_rms"] < 2.0
+    assert window["kinematic"]["floor_penetration_frames"] > 0
+    assert window["kinematic"]["floor_depth_peak_mm"] > 10
+    rows = list(csv.DictReader((simulated / "r.csv").open()))
+    assert [r["part"] for r in rows] == ["all", "window 0", "piece 0", "piece 1"]
+
+
+def test_video_is_written(simulated):
+    from PIL import Image
+
+    gif = Image.open(simulated / "r.gif")
+    assert gif.n_frames == 180 // 4
+
+
+def _run(*args, env=None):
+    return subprocess.run([sys.executable, "-m", "upm", "simulate", *args],
+                          capture_output=True, text=True, env=env)
+
+
+def test_errors_are_one_line_exit_2(tmp_path, data_dir):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["UPM_CACHE"] = str(tmp_path / "cache")
+    base = ["--data", str(data_dir), "--report", str(tmp_path / "r.json")]
+    for args, message in [
+        (["--sequence", "02_01@0:50", "--method", "nope"], "no transition method 'nope'"),
+        (["--sequence", "99_01", "--method", "linear"], "no clip '99_01'"),
+        (["--sequence", "02_01@0:50", "02_02", "--method", "upm"], "needs --map"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--video", "x.avi"],
+         "--video x.avi"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--viewer"], "needs a display"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--modes", "free",
+          "--render", "driven"], "--render driven needs"),
+    ]:
+        result = _run(*base, *args, env=env)
+        assert result.returncode == 2, (args, result.stderr)
+        assert message in result.stderr, (args, result.stderr)
+        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+        assert not (tmp_path / "r.json").exists()
