@@ -279,6 +279,7 @@ def _batch_step(growing: _GrowingMap, search: _MapSearch, x: np.ndarray, hint: n
         winner = np.where(closer, old_k + nearest_new, winner)
         winner[born] = old_k + np.arange(len(born))
         growing.append(x[born])
+        search.refresh()  # the newborns join the searched neurons
     if eta <= 0.0:
         return winner, len(born)
     movers = np.ones(len(x), dtype=bool)
