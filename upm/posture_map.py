@@ -33,7 +33,7 @@ import numpy as np
 
 from upm.angular_search import AngularIndex
 from upm.class_maps import ClassMaps, load_map
-from upm.errors import UsageError
+from upm.errors import DataFileError, UsageError
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
 from upm.upm_training import train_upm_class
 
@@ -68,23 +68,33 @@ def default_radius_deg(samples_deg, seed: int = 0) -> float:
     return max(float(np.sqrt(np.quantile(dist_sq, RADIUS_QUANTILE))), 1e-6)
 
 
-def _per_class(value, name: str) -> dict:
+def _per_class(value, name: str, allow_zero: bool = False) -> dict:
     """A float, a per-class dict, or None -> a dict over every class (None kept)."""
     if value is None or isinstance(value, (int, float)):
-        if value is not None and not value > 0:
-            raise UsageError(f"{name} must be positive, not {value}")
-        return {c: (None if value is None else float(value)) for c in CLASS_NAMES}
-    if isinstance(value, dict):
+        per_class = {c: value for c in CLASS_NAMES}
+    elif isinstance(value, dict):
         unknown = set(value) - set(CLASS_NAMES)
         if unknown:
             raise UsageError(f"{name}: unknown class {sorted(unknown)[0]!r} "
                              f"(classes: {', '.join(CLASS_NAMES)})")
-        out = {c: (None if value.get(c) is None else float(value[c])) for c in CLASS_NAMES}
-        for c, v in out.items():
-            if v is not None and not v > 0:
-                raise UsageError(f"{name}[{c}] must be positive, not {v}")
-        return out
-    raise UsageError(f"{name} must be a number or a dict of class -> number, not {value!r}")
+        per_class = {c: value.get(c) for c in CLASS_NAMES}
+    else:
+        raise UsageError(f"{name} must be a number or a dict of class -> number, "
+                         f"not {value!r}")
+    out = {}
+    for c, v in per_class.items():
+        if v is None:
+            out[c] = None
+            continue
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            raise UsageError(f"{name}[{c}] must be a number, not {v!r}") from None
+        if not (v >= 0.0 if allow_zero else v > 0.0) or not np.isfinite(v):
+            raise UsageError(f"{name}[{c}] must be {'>= 0' if allow_zero else '> 0'} and "
+                             f"finite, not {v}")
+        out[c] = v
+    return out
 
 
 class UniformPostureMap(ClassMaps):
@@ -129,7 +139,8 @@ class UniformPostureMap(ClassMaps):
         if int(batch_size) < 1:
             raise UsageError(f"batch_size must be at least 1, not {batch_size}")
         self._radius = _per_class(radius_deg, "radius_deg")
-        self._neighbourhood = _per_class(neighbourhood_deg, "neighbourhood_deg")
+        self._neighbourhood = _per_class(neighbourhood_deg, "neighbourhood_deg",
+                                         allow_zero=True)
         self.params = {
             "learning_rate": float(learning_rate), "passes": int(passes),
             "batch_size": int(batch_size), "seed": int(seed), "shuffle": bool(shuffle),
@@ -160,8 +171,10 @@ class UniformPostureMap(ClassMaps):
         radius, neighbourhood = {}, {}
         for c in CLASS_NAMES:
             sub = x[:, CLASS_SLICES[c]]
-            radius[c] = self._radius[c] or default_radius_deg(sub, seed=p["seed"])
-            neighbourhood[c] = self._neighbourhood[c] or radius[c]
+            radius[c] = (default_radius_deg(sub, seed=p["seed"]) if self._radius[c] is None
+                         else self._radius[c])
+            neighbourhood[c] = (radius[c] if self._neighbourhood[c] is None
+                                else self._neighbourhood[c])
             result = train_upm_class(
                 sub, radius[c], neighbourhood[c], learning_rate=p["learning_rate"],
                 passes=p["passes"], batch_size=p["batch_size"], seed=p["seed"],
@@ -176,6 +189,9 @@ class UniformPostureMap(ClassMaps):
         return self
 
     def _restore_extra(self, arrays, path) -> None:
-        self._radius = _per_class(self.params.get("radius_deg"), "radius_deg")
-        self._neighbourhood = _per_class(self.params.get("neighbourhood_deg"),
-                                         "neighbourhood_deg")
+        try:
+            self._radius = _per_class(self.params.get("radius_deg"), "radius_deg")
+            self._neighbourhood = _per_class(self.params.get("neighbourhood_deg"),
+                                             "neighbourhood_deg", allow_zero=True)
+        except UsageError as exc:
+            raise DataFileError(path, f"corrupt parameters: {exc}") from None

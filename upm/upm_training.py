@@ -325,8 +325,9 @@ def train_upm_class(samples_deg, radius_deg: float, neighbourhood_deg: float,
     radius_deg : float
         ``R``: a sample farther than this from every neuron becomes a neuron.
     neighbourhood_deg : float
-        Initial neighbourhood radius (shrinks linearly to 0 with ``eta``); at most
-        ``2.5 R`` is searched through the neighbour graph, more through the KD-tree.
+        Initial neighbourhood radius (shrinks linearly to 0 with ``eta``); 0 moves the
+        winner only. Neighbourhoods up to about ``2 R`` come from the neighbour graph,
+        larger ones from the KD-tree (both exact).
     learning_rate : float
         ``eta`` of the first pass, in ``(0, 1)``; it falls linearly to 0 over ``passes``.
     passes : int
