@@ -35,7 +35,7 @@ def test_train_som_with_a_grid(data_dir, tmp_path, capsys):
     out = tmp_path / "som.npz"
     assert main(["train", "--data", str(data_dir), "--clips", "09_06", "--kind", "som",
                  "--grid", "4x5", "--epochs", "3", "--out", str(out)]) == 0
-    assert "SOM trained on 1 clips" in capsys.readouterr().out
+    assert "SOM trained on 1 clip," in capsys.readouterr().out
     som = load_map(out)
     assert som.kind == "som" and all(len(w) == 20 for w in som.neurons.values())
     assert main(["map-info", str(out)]) == 0

@@ -42,7 +42,8 @@ def run(args) -> int:
     print_summary(posture_map, f"{args.map}: {name} (format version {FORMAT_VERSION}, "
                                f"{info['bytes']} bytes)")
     clips = info["clips"]
-    print(f"\ntrained on {len(clips)} clips ({info['samples']} frames) in "
+    n_clips = f"{len(clips)} clip" + ("" if len(clips) == 1 else "s")
+    print(f"\ntrained on {n_clips} ({info['samples']} frames) in "
           f"{info['train_seconds']:.1f} s: {' '.join(clips)}")
     params = {k: v for k, v in posture_map.params.items()
               if k not in ("radius_deg", "neighbourhood_deg", "grid")}

@@ -40,18 +40,19 @@ def configure(parser) -> None:
                      "(degrees, all classes)")
     upm.add_argument("--neighbourhood", type=float, metavar="DEG", default=None,
                      help="initial neighbourhood radius (degrees; default: R)")
-    upm.add_argument("--learning-rate", type=float, default=0.1,
+    upm.add_argument("--learning-rate", type=float, default=0.1, metavar="ETA",
                      help="initial learning rate eta, falling linearly to 0 (default 0.1)")
-    upm.add_argument("--passes", type=int, default=5,
+    upm.add_argument("--passes", type=int, default=5, metavar="N",
                      help="passes over the data with eta > 0 (default 5; a closing pass "
                      "at eta = 0 follows)")
-    upm.add_argument("--batch-size", type=int, default=512,
+    upm.add_argument("--batch-size", type=int, default=512, metavar="N",
                      help="samples per vectorised step (1 = strictly sequential; default 512)")
     som = parser.add_argument_group("SOM parameters")
     som.add_argument("--grid", metavar="ROWSxCOLS", default=None,
                      help="grid size for every class, e.g. 30x40 (default: 5 N^0.54321 "
                      "neurons shaped by the data)")
-    som.add_argument("--epochs", type=int, default=10, help="batch-map epochs (default 10)")
+    som.add_argument("--epochs", type=int, default=10, metavar="N",
+                     help="batch-map epochs (default 10)")
 
 
 def _grid(text):
@@ -134,7 +135,8 @@ def run(args) -> int:
                     "train_seconds": posture_map.provenance["train_seconds"],
                     "classes": summary_rows(posture_map)})
         return 0
-    print_summary(posture_map, f"{posture_map.kind.upper()} trained on {len(names)} clips, "
+    clips = f"{len(names)} clip" + ("" if len(names) == 1 else "s")
+    print_summary(posture_map, f"{posture_map.kind.upper()} trained on {clips}, "
                                f"{len(postures)} frames, in "
                                f"{posture_map.provenance['train_seconds']:.1f} s")
     print(f"\nsaved {args.out}")
