@@ -22,6 +22,8 @@ from upm.errors import UpmError
 #: Subcommand name -> module implementing it, in the order ``upm --help`` lists them.
 COMMANDS: dict[str, str] = {
     "clips": "upm.commands.clips",
+    "train": "upm.commands.train",
+    "map-info": "upm.commands.map_info",
     "bench": "upm.commands.bench",
     "transition": "upm.commands.transition",
     "sequence": "upm.commands.sequence",

@@ -1,0 +1,82 @@
+"""Posture maps: UPM training time on the train split, neurons per class, and the
+key-posture query per call (single and batched), next to a plain cKDTree query on the
+same neurons (raw degrees, no wrap-around, no interpolation) as the same-run reference.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from eval.bench import BenchContext, timeit_best
+
+NAME = "posture_map"
+
+
+def run(context: BenchContext) -> dict:
+    from scipy.spatial import cKDTree
+
+    from upm.catalog import Catalog
+    from upm.class_maps import postures_of_clips
+    from upm.posture_map import UniformPostureMap
+    from upm.skeleton import CLASS_NAMES, CLASS_SLICES
+    from upm.som import KohonenSOM
+
+    catalog = Catalog(context.data_dir)
+    names = catalog.names("train")
+    if context.quick:
+        names = ["02_02", "09_06", "35_01"]
+    x, names = postures_of_clips(catalog, names)
+    start = time.perf_counter()
+    upm = UniformPostureMap().fit(x, clip_names=names)
+    train_s = time.perf_counter() - start
+    report = {
+        "clips": len(names),
+        "frames": len(x),
+        "upm_train_s": train_s,
+        "upm_train_us_per_frame": 1e6 * train_s / len(x),
+        "classes": {c: {"neurons": len(upm.neurons[c]),
+                        "radius_deg": upm.radius_deg[c],
+                        "quantisation_error_mean_deg": upm.stats[c]["quantisation_error_mean_deg"],
+                        "quantisation_error_max_deg": upm.stats[c]["quantisation_error_max_deg"],
+                        "train_s": upm.stats[c]["train_seconds"]}
+                    for c in CLASS_NAMES},
+    }
+    if not context.quick:
+        start = time.perf_counter()
+        som = KohonenSOM().fit(x, clip_names=names)
+        report["som_train_s"] = time.perf_counter() - start
+        report["som_neurons"] = {c: len(som.neurons[c]) for c in CLASS_NAMES}
+
+    # Queries: pairs of held-out frames (test clips), alpha = 0.5.
+    rng = np.random.default_rng(0)
+    held_out = np.concatenate([catalog.load(n).posture_deg for n in catalog.names("test")[:3]])
+    n_batch = 200 if context.quick else 2000
+    a = held_out[rng.integers(len(held_out), size=n_batch)]
+    b = held_out[rng.integers(len(held_out), size=n_batch)]
+    upm.key_posture(a[0], b[0])  # build the indexes outside the timing
+    repeat = 3 if context.quick else 7
+    single_s = timeit_best(lambda: [upm.key_posture(a[i], b[i]) for i in range(50)],
+                           repeat=repeat) / 50
+    batch_s = timeit_best(lambda: upm.key_posture(a, b, 0.5), repeat=repeat) / n_batch
+    # Reference: one plain cKDTree nearest-neighbour query per class on the same neurons.
+    trees = {c: cKDTree(upm.neurons[c]) for c in CLASS_NAMES}
+    mid = 0.5 * (a + b)
+
+    def plain(rows):
+        for c in CLASS_NAMES:
+            trees[c].query(mid[rows, CLASS_SLICES[c]])
+
+    ref_single_s = timeit_best(lambda: [plain(i) for i in range(50)], repeat=repeat) / 50
+    ref_batch_s = timeit_best(lambda: plain(slice(None)), repeat=repeat) / n_batch
+    report.update({
+        "key_posture_us_single": 1e6 * single_s,
+        "key_posture_us_batched": 1e6 * batch_s,
+        "batch_size": n_batch,
+        "reference_ckdtree_4_classes_us_single": 1e6 * ref_single_s,
+        "reference_ckdtree_4_classes_us_batched": 1e6 * ref_batch_s,
+        "key_posture_ratio_single": single_s / ref_single_s,
+        "key_posture_ratio_batched": batch_s / ref_batch_s,
+    })
+    return report

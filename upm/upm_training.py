@@ -1,0 +1,380 @@
+"""Training one class map of the Uniform Posture Map (paper section 2.3).
+
+On the sub-vectors ``x`` (degrees) of one joint class:
+
+1. the first sample becomes the first neuron;
+2. a sample farther than ``R`` from every neuron becomes a new neuron (no neuron moves);
+3. otherwise its winner is the nearest neuron (wrapped squared distance), and
+4. the winner and its neighbours move toward it: ``W += eta * wrap(x - W)``;
+5. after each pass ``eta`` and the neighbourhood radius shrink linearly; the pass at
+   which ``eta`` reaches 0 moves nothing but still adds a neuron for every sample left
+   beyond ``R`` -- so every training sample ends within ``R`` of a neuron.
+
+**Neighbours** (the paper fixes no grid): the neurons within the current neighbourhood
+radius ``r`` of the winner, by wrapped distance in weight space (the winner itself
+included). ``r`` starts at ``neighbourhood_deg`` and shrinks with ``eta``, linearly to 0.
+
+**Batches**: samples are taken ``batch_size`` at a time. Growth is resolved sample by
+sample in order (a sample within ``R`` of a neuron born earlier in the same batch is not
+a new neuron, and may have it as winner). Winners and neighbourhoods are found against
+the map as it stood at the batch's start, and each neuron's moves within the batch are
+composed in sample order -- ``W_n = W_0 + sum_m eta (1 - eta)^(n - m) wrap(x_m - W_0)``,
+exactly the sequential result for the same winners. With ``batch_size=1`` this *is* the
+sequential algorithm of the paper; larger batches only let a later sample of the batch
+see its winner not yet moved by earlier ones (a move of at most ``eta * R`` each).
+
+**Search** (exact, see :mod:`upm.angular_search`): a snapshot of the map holds a KD-tree
+on the circle embedding and a neighbour graph (every pair of neurons within
+``graph_radius`` of each other). Neurons move after the snapshot by at most ``drift``
+(measured every batch); the bounds below allow for it, and the snapshot is rebuilt when
+the drift or the neurons born since grow too large. A sample's winner in the previous
+pass is a *hint*: if it lies at ``U`` from the sample, any nearer neuron lies within
+``2 U`` of the hint (triangle inequality), so within ``2 U + 2 drift`` of it in the
+snapshot -- in its graph list when that is below ``graph_radius``. Other samples go to
+the KD-tree. Neighbourhoods (radius ``r``) come from the graph likewise.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from upm.angles import wrap_deg
+from upm.angular_search import (
+    AngularIndex,
+    diff_of_wrapped,
+    pairwise_sq_deg,
+    rowwise_sq_deg,
+)
+
+
+@dataclass(frozen=True)
+class ClassTrainingResult:
+    """One trained class map.
+
+    Attributes
+    ----------
+    neurons_deg : ndarray, shape (K, D)
+        Neuron weights in degrees, wrapped to ``[-180, 180)``.
+    births_per_pass : tuple of int
+        Neurons added during each pass (the first includes the first neuron).
+    seconds : float
+        Wall-clock training time.
+    """
+
+    neurons_deg: np.ndarray
+    births_per_pass: tuple[int, ...]
+    seconds: float
+
+
+class _GrowingMap:
+    """Neuron weights (wrapped degrees) in an array that grows by doubling."""
+
+    def __init__(self, first_deg: np.ndarray):
+        self.weights = np.zeros((64, first_deg.shape[0]))
+        self.size = 0
+        self.append(first_deg[None, :])
+
+    @property
+    def current(self) -> np.ndarray:
+        return self.weights[:self.size]
+
+    def append(self, rows_deg: np.ndarray) -> None:
+        need = self.size + len(rows_deg)
+        if need > len(self.weights):
+            grown = np.zeros((max(need, 2 * len(self.weights)), self.weights.shape[1]))
+            grown[:self.size] = self.weights[:self.size]
+            self.weights = grown
+        self.weights[self.size:need] = wrap_deg(rows_deg)
+        self.size = need
+
+    def move(self, rows: np.ndarray, delta_deg: np.ndarray) -> None:
+        self.weights[rows] = wrap_deg(self.weights[rows] + delta_deg)
+
+
+def _segment_min(values: np.ndarray, segment: np.ndarray, n_segments: int):
+    """Position of the minimum of ``values`` within each segment id (-1 if empty)."""
+    order = np.lexsort((values, segment))
+    first = np.searchsorted(segment[order], np.arange(n_segments))
+    found = first < len(order)
+    found[found] &= segment[order][first[found]] == np.arange(n_segments)[found]
+    pos = np.full(n_segments, -1)
+    pos[found] = order[first[found]]
+    return pos
+
+
+class _Snapshot:
+    """The map at one moment: a KD-tree index and a neighbour graph of its neurons.
+
+    ``graph`` is CSR (``indptr``, ``indices``, ``dist``): for each neuron, every neuron
+    within ``radius`` of it at snapshot time (itself included) and their distances.
+    """
+
+    def __init__(self, weights: np.ndarray, radius: float):
+        self.weights0 = weights.copy()
+        self.size = len(weights)
+        self.radius = radius
+        self.index = AngularIndex(self.weights0)
+        # Chord <= wrapped distance: the chord pairs are a superset; keep the exact ones.
+        pairs = self.index.tree.query_pairs(radius, output_type="ndarray")
+        selves = np.arange(self.size)
+        ci = np.concatenate([pairs[:, 0], pairs[:, 1], selves])
+        ni = np.concatenate([pairs[:, 1], pairs[:, 0], selves])
+        dist = np.sqrt(rowwise_sq_deg(self.weights0[ci], self.weights0[ni]))
+        keep = dist <= radius
+        order = np.lexsort((ni[keep], ci[keep]))
+        ci, ni, dist = ci[keep][order], ni[keep][order], dist[keep][order]
+        self.indptr = np.searchsorted(ci, np.arange(self.size + 1))
+        self.indices = ni
+        self.dist = dist
+
+
+class _MapSearch:
+    """Exact winner and neighbourhood search over a growing, moving map.
+
+    Neurons that moved more than ``max_drift`` since the snapshot ("loose") and those
+    born since are the *extras*, searched by brute force; the bounds of the tree and the
+    graph carry the largest move of the others (``drift``).
+    """
+
+    def __init__(self, growing: _GrowingMap, radius_deg: float):
+        self.growing = growing
+        self.graph_radius = 2.0 * radius_deg
+        self.max_drift = 0.25 * radius_deg
+        self.snap = _Snapshot(growing.current, self.graph_radius)
+        self.drift = 0.0
+        self.extras = np.zeros(0, dtype=np.intp)
+        self.anchored = np.ones(1, dtype=bool)
+        self.rebuilds = 1
+
+    def refresh(self) -> None:
+        """Measure each neuron's move since the snapshot; rebuild it when too many
+        neurons have come loose or been born."""
+        g, s = self.growing, self.snap
+        moved = diff_of_wrapped(g.weights[:s.size], s.weights0)
+        disp = np.sqrt(np.einsum("kd,kd->k", moved, moved))
+        loose = np.flatnonzero(disp > self.max_drift)
+        if len(loose) + g.size - s.size > max(16, s.size // 32):
+            self.snap = s = _Snapshot(g.current, self.graph_radius)
+            disp, loose = np.zeros(s.size), np.zeros(0, dtype=np.intp)
+            self.rebuilds += 1
+        self.anchored = disp <= self.max_drift
+        self.drift = float(disp[self.anchored].max(initial=0.0))
+        self.extras = np.concatenate([loose, np.arange(s.size, g.size)])
+        s.index.refresh(g.weights[:s.size], slack=self.drift)
+
+    def _graph_pairs(self, rows, centres, reach):
+        """(row, neuron) pairs from the graph lists of anchored ``centres`` whose
+        snapshot distance is within ``reach`` (per row)."""
+        s = self.snap
+        counts = s.indptr[centres + 1] - s.indptr[centres]
+        row = np.repeat(rows, counts)
+        slot = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        edge = np.repeat(s.indptr[centres], counts) + slot
+        keep = s.dist[edge] <= np.repeat(np.broadcast_to(reach, centres.shape), counts)
+        return row[keep], s.indices[edge[keep]]
+
+    def nearest(self, x: np.ndarray, hint: np.ndarray):
+        """Exact nearest neuron of each row of ``x``; ``hint`` a neuron index or -1."""
+        s, w = self.snap, self.growing.weights
+        best = np.full(len(x), -1)
+        best_sq = np.full(len(x), np.inf)
+        hinted = np.flatnonzero((hint >= 0) & (hint < s.size))
+        hinted = hinted[self.anchored[hint[hinted]]]
+        if len(hinted):
+            h = hint[hinted]
+            reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
+            ok = reach <= s.radius
+            hinted, h, reach = hinted[ok], h[ok], reach[ok]
+            row, cand = self._graph_pairs(np.arange(len(hinted)), h, reach)
+            sq = rowwise_sq_deg(x[hinted][row], w[cand])
+            pos = _segment_min(sq, row, len(hinted))
+            best[hinted] = cand[pos]
+            best_sq[hinted] = sq[pos]
+        cold = np.flatnonzero(best < 0)
+        if len(cold):
+            best[cold], best_sq[cold] = s.index.nearest(x[cold])
+        if len(self.extras):
+            sq = pairwise_sq_deg(x, w[self.extras])
+            j = np.argmin(sq, axis=1)
+            j_sq = sq[np.arange(len(x)), j]
+            closer = j_sq < best_sq
+            best[closer] = self.extras[j[closer]]
+            best_sq[closer] = j_sq[closer]
+        return best, best_sq
+
+    def neighbourhoods(self, centres: np.ndarray, radius: float):
+        """(centre position, neuron) pairs within ``radius`` of neurons ``centres``,
+        sorted by centre position, without repeats."""
+        s, w = self.snap, self.growing.weights
+        reach = radius + 2.0 * self.drift
+        in_graph = np.zeros(len(centres), dtype=bool)
+        snapped = centres < s.size
+        in_graph[snapped] = self.anchored[centres[snapped]] & (reach <= s.radius)
+        gi = np.flatnonzero(in_graph)
+        ci, ni = self._graph_pairs(gi, centres[gi], reach)
+        parts_c, parts_n = [ci], [ni]
+        other = np.flatnonzero(~in_graph)
+        if len(other):
+            oc, on = s.index.within(w[centres[other]], radius)
+            parts_c.append(other[oc])
+            parts_n.append(on)
+        if len(self.extras):
+            ce, ne = np.nonzero(pairwise_sq_deg(w[centres], w[self.extras]) <= radius * radius)
+            parts_c.append(ce)
+            parts_n.append(self.extras[ne])
+        ci, ni = np.concatenate(parts_c), np.concatenate(parts_n)
+        keep = rowwise_sq_deg(w[centres[ci]], w[ni]) <= radius * radius
+        pairs = np.unique(np.stack([ci[keep], ni[keep]], axis=1), axis=0)
+        return pairs[:, 0], pairs[:, 1]
+
+
+def _resolve_growth(x, far, r_sq):
+    """Which far samples become neurons, in batch order (the leader rule).
+
+    Parameters
+    ----------
+    x : ndarray, shape (B, D)
+    far : ndarray of int, shape (F,)
+        Batch positions (ascending) of samples farther than R from every old neuron.
+    r_sq : float
+
+    Returns
+    -------
+    ndarray of int
+        Batch positions of the samples that become neurons, ascending.
+    """
+    if len(far) <= 1:
+        return far
+    near = pairwise_sq_deg(x[far], x[far]) <= r_sq
+    created = np.zeros(len(far), dtype=bool)
+    for i in range(len(far)):
+        created[i] = not near[i, :i][created[:i]].any()
+    return far[created]
+
+
+def _batch_step(growing: _GrowingMap, search: _MapSearch, x: np.ndarray, hint: np.ndarray,
+                r_sq: float, neighbourhood_deg: float, eta: float):
+    """Process one batch of samples.
+
+    Returns
+    -------
+    winner : ndarray of int, shape (B,)
+        Each sample's winner (for a sample that became a neuron: that neuron).
+    born : int
+        Neurons added.
+    """
+    search.refresh()
+    old_k = growing.size
+    winner, win_sq = search.nearest(x, hint)
+    born = _resolve_growth(x, np.flatnonzero(win_sq > r_sq), r_sq)
+    if len(born):
+        # A neuron born at batch position p exists for the samples after p only.
+        to_new = pairwise_sq_deg(x, x[born])
+        to_new[np.arange(len(x))[:, None] <= born[None, :]] = np.inf
+        nearest_new = np.argmin(to_new, axis=1)
+        closer = to_new[np.arange(len(x)), nearest_new] < win_sq
+        winner = np.where(closer, old_k + nearest_new, winner)
+        winner[born] = old_k + np.arange(len(born))
+        growing.append(x[born])
+        search.refresh()  # the newborns join the searched neurons
+    if eta <= 0.0:
+        return winner, len(born)
+    movers = np.ones(len(x), dtype=bool)
+    movers[born] = False
+    movers = np.flatnonzero(movers)
+    if len(movers) == 0:
+        return winner, len(born)
+    birth_pos = np.full(growing.size, -1)
+    birth_pos[old_k:] = born
+    # Neighbourhoods of the distinct winners, at the batch-start positions.
+    centres, which = np.unique(winner[movers], return_inverse=True)
+    c_of_pair, n_of_pair = search.neighbourhoods(centres, neighbourhood_deg)
+    starts = np.searchsorted(c_of_pair, np.arange(len(centres) + 1))
+    counts = np.diff(starts)[which]
+    # Expand to (sample, neuron) pairs: each mover moves its winner's neighbourhood.
+    pair_sample = np.repeat(movers, counts)
+    slot = np.arange(len(pair_sample)) - np.repeat(np.cumsum(counts) - counts, counts)
+    pair_neuron = n_of_pair[np.repeat(starts[which], counts) + slot]
+    alive = birth_pos[pair_neuron] < pair_sample
+    pair_sample, pair_neuron = pair_sample[alive], pair_neuron[alive]
+    # Compose each neuron's moves in sample order: weight eta (1 - eta)^(later moves).
+    order = np.lexsort((pair_sample, pair_neuron))
+    pair_sample, pair_neuron = pair_sample[order], pair_neuron[order]
+    neurons, first, n_moves = np.unique(pair_neuron, return_index=True, return_counts=True)
+    rank = np.arange(len(pair_neuron)) - np.repeat(first, n_moves)
+    later = np.repeat(n_moves, n_moves) - 1 - rank
+    weight = eta * (1.0 - eta) ** later
+    diff = diff_of_wrapped(x[pair_sample], growing.weights[pair_neuron]) * weight[:, None]
+    growing.move(neurons, np.add.reduceat(diff, first, axis=0))
+    return winner, len(born)
+
+
+def train_upm_class(samples_deg, radius_deg: float, neighbourhood_deg: float,
+                    learning_rate: float = 0.1, passes: int = 5, batch_size: int = 512,
+                    seed: int = 0, shuffle: bool = True, desc: str | None = None,
+                    ) -> ClassTrainingResult:
+    """Train one class map of the UPM.
+
+    Parameters
+    ----------
+    samples_deg : array_like, shape (N, D)
+        Training sub-vectors in degrees (wrapped internally).
+    radius_deg : float
+        ``R``: a sample farther than this from every neuron becomes a neuron.
+    neighbourhood_deg : float
+        Initial neighbourhood radius (shrinks linearly to 0 with ``eta``); 0 moves the
+        winner only. Neighbourhoods up to about ``2 R`` come from the neighbour graph,
+        larger ones from the KD-tree (both exact).
+    learning_rate : float
+        ``eta`` of the first pass, in ``(0, 1)``; it falls linearly to 0 over ``passes``.
+    passes : int
+        Passes with ``eta > 0``; one closing pass at ``eta = 0`` follows.
+    batch_size : int
+        Samples per vectorised step (1 = the paper's sequential algorithm exactly).
+    seed : int
+        Seeds the per-pass shuffle of the sample order.
+    shuffle : bool
+        Visit the samples in a new seeded random order each pass (else in the given order).
+    desc : str, optional
+        Label of a progress bar (on stderr when it is a terminal).
+
+    Returns
+    -------
+    ClassTrainingResult
+    """
+    from upm.progress import progress
+
+    x_all = wrap_deg(np.asarray(samples_deg, dtype=float))
+    n = len(x_all)
+    start_s = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    orders = [rng.permutation(n) if shuffle else np.arange(n) for _ in range(passes + 1)]
+    growing = _GrowingMap(x_all[orders[0][0]])
+    search = _MapSearch(growing, float(radius_deg))
+    r_sq = float(radius_deg) ** 2
+    hint = np.full(n, -1)
+    hint[orders[0][0]] = 0
+    births = []
+    with progress(total=(passes + 1) * n, desc=desc, unit="sample",
+                  disable=None if desc else True) as bar:
+        for p in range(passes + 1):
+            fraction_left = 1.0 - p / passes if passes > 0 else 0.0
+            eta = learning_rate * fraction_left
+            radius_nb = neighbourhood_deg * fraction_left
+            added = 1 if p == 0 else 0
+            order = orders[p][1:] if p == 0 else orders[p]
+            for s in range(0, len(order), batch_size):
+                rows = order[s:s + batch_size]
+                hint[rows], born = _batch_step(growing, search, x_all[rows], hint[rows],
+                                               r_sq, radius_nb, eta)
+                added += born
+                bar.update(len(rows))
+            births.append(added)
+    return ClassTrainingResult(
+        neurons_deg=growing.current.copy(),
+        births_per_pass=tuple(births),
+        seconds=time.perf_counter() - start_s,
+    )
