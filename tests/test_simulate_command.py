@@ -89,3 +89,24 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir):
         assert message in result.stderr, (args, result.stderr)
         assert len(result.stderr.strip().splitlines()) == 1, result.stderr
         assert not (tmp_path / "r.json").exists()
+
+
+def test_simulate_with_the_uniform_posture_map(tmp_path, data_dir, capsys):
+    """The paper's method end to end: a small map trained on two clips gives the key
+    posture of the window; the report names the map and the method."""
+    map_path = tmp_path / "small.npz"
+    assert main(["train", "--data", str(data_dir), "--clips", "02_02", "05_01",
+                 "--out", str(map_path)]) == 0
+    out = tmp_path / "upm.json"
+    assert main(["simulate", "--data", str(data_dir), "--map", str(map_path),
+                 "--sequence", "02_01@0:60", "02_03@20:80", "--modes", "driven",
+                 "--no-window-runs", "--report", str(out)]) == 0
+    assert "method upm" in capsys.readouterr().out
+    report = json.loads(out.read_text())
+    assert report["sequence"]["method"] == "upm"
+    assert report["sequence"]["map"] == str(map_path)
+    (window,) = report["windows"]
+    assert window["method"] == "upm" and window["frames"] == 20
+    assert "free" not in report["totals"]["tracking"]
+    assert "free_window" not in window.get("tracking", {})
+    assert report["pieces"][0]["tracking"]["driven"]["error_deg_rms"] < 2.0
