@@ -80,19 +80,17 @@ def test_check_a_split_prints_the_calibration(tmp_path, data_dir, capsys):
     assert 0 < total["residual_force_bw_mean"] < 1
 
 
-def _run(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "upm", "check", *args],
-                          capture_output=True, text=True, env=env)
-
-
-def test_errors_are_one_line_exit_2(tmp_path, data_dir):
-    env = {**os.environ, "UPM_CACHE": str(tmp_path / "cache")}
+def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys):
+    # The installed command line, once: exit code 2 and one line on stderr.
+    result = subprocess.run([sys.executable, "-m", "upm", "check"], capture_output=True,
+                            text=True, env={**os.environ, "UPM_CACHE": str(tmp_path / "c")})
+    assert result.returncode == 2
+    assert result.stderr.strip().startswith("upm check: error: give a motion")
     amc = tmp_path / "x.amc"
     amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\n")
     asf = tmp_path / "02.asf"
     shutil.copy(data_dir / "02" / "02.asf", asf)
     for args, message in [
-        ([], "give a motion"),
         ([str(amc)], "needs its skeleton"),
         ([str(tmp_path / "missing.amc"), "--asf", str(asf)], "no such file"),
         ([str(amc), "--asf", str(asf)], "x.amc"),
@@ -101,7 +99,7 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir):
         (["02_01@500:900", "--data", str(data_dir)], "out of range"),
         (["02_01", "--asf", str(asf), "--data", str(data_dir)], "go with an AMC file"),
     ]:
-        result = _run(*args, env=env)
-        assert result.returncode == 2, (args, result.stderr)
-        assert message in result.stderr, (args, result.stderr)
-        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+        assert main(["check", *args]) == 2, args
+        err = capsys.readouterr().err
+        assert message in err, (args, err)
+        assert len(err.strip().splitlines()) == 1, err

@@ -21,10 +21,11 @@ def cache(tmp_path_factory, monkeypatch):
 @pytest.fixture(scope="module")
 def simulated(tmp_path_factory, data_dir):
     out = tmp_path_factory.mktemp("simulate")
-    os.environ.setdefault("UPM_CACHE", str(out / "cache"))
-    code = main(["simulate", "--data", str(data_dir), "--method", "linear",
-                 "--sequence", "02_01@0:90", "02_02@30:100", "--frames", "20",
-                 "--report", str(out / "r.json"), "--video", str(out / "r.gif")])
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("UPM_CACHE", str(tmp_path_factory.getbasetemp() / "simulate-cache"))
+        code = main(["simulate", "--data", str(data_dir), "--method", "linear",
+                     "--sequence", "02_01@0:90", "02_02@30:100", "--frames", "20",
+                     "--report", str(out / "r.json"), "--video", str(out / "r.gif")])
     assert code == 0
     return out
 
@@ -56,26 +57,24 @@ def test_report_marks_windows_and_pieces(simulated):
     assert window["kinematic"]["floor_depth_peak_mm"] > 10
     rows = list(csv.DictReader((simulated / "r.csv").open()))
     assert [r["part"] for r in rows] == ["all", "window 0", "piece 0", "piece 1"]
-
-
-def test_video_is_written(simulated):
     from PIL import Image
 
-    gif = Image.open(simulated / "r.gif")
-    assert gif.n_frames == 180 // 4
+    assert Image.open(simulated / "r.gif").n_frames == 180 // 4  # drawn at 30 fps
 
 
-def _run(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "upm", "simulate", *args],
-                          capture_output=True, text=True, env=env)
-
-
-def test_errors_are_one_line_exit_2(tmp_path, data_dir):
-    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    env["UPM_CACHE"] = str(tmp_path / "cache")
+def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     base = ["--data", str(data_dir), "--report", str(tmp_path / "r.json")]
+    # The installed command line, once: exit code 2 and one line on stderr.
+    result = subprocess.run([sys.executable, "-m", "upm", "simulate", *base, "--sequence",
+                             "02_01@0:50", "--method", "nope"], capture_output=True, text=True,
+                            env={**os.environ, "UPM_CACHE": str(tmp_path / "cache")})
+    assert result.returncode == 2
+    assert result.stderr.strip() == ("upm simulate: error: no transition method 'nope' "
+                                     "(methods: upm, som, classnn, snap, linear, slerp, "
+                                     "inertialize, spacetime)")
     for args, message in [
-        (["--sequence", "02_01@0:50", "--method", "nope"], "no transition method 'nope'"),
         (["--sequence", "99_01", "--method", "linear"], "no clip '99_01'"),
         (["--sequence", "02_01@0:50", "02_02", "--method", "upm"], "needs --map"),
         (["--sequence", "02_01@0:50", "--method", "linear", "--video", "x.avi"],
@@ -84,10 +83,10 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir):
         (["--sequence", "02_01@0:50", "--method", "linear", "--modes", "free",
           "--render", "driven"], "--render driven needs"),
     ]:
-        result = _run(*base, *args, env=env)
-        assert result.returncode == 2, (args, result.stderr)
-        assert message in result.stderr, (args, result.stderr)
-        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+        assert main(["simulate", *base, *args]) == 2, args
+        err = capsys.readouterr().err
+        assert message in err, (args, err)
+        assert len(err.strip().splitlines()) == 1, err
         assert not (tmp_path / "r.json").exists()
 
 
