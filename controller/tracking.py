@@ -72,6 +72,9 @@ class Tracking:
         The simulated state at every frame (NaN after a divergence).
     dof_error_deg : ndarray, shape (T, H)
         Simulated minus reference hinge angle, wrapped to [-180, 180), degrees.
+    dof_reachable_error_deg : ndarray, shape (T, H)
+        Simulated angle minus the reference clamped into the hinge's range (what the
+        servo is asked to reach: a reference beyond its ASF limit cannot be), degrees.
     limit_rows : ndarray of int, shape (T,)
         Active joint-limit constraint rows at each frame.
     limit_steps : int
@@ -108,6 +111,7 @@ class Tracking:
     hinge_names: tuple[str, ...]
     qpos: np.ndarray
     dof_error_deg: np.ndarray
+    dof_reachable_error_deg: np.ndarray
     limit_rows: np.ndarray
     limit_steps: int
     limit_joint_frames: dict[str, int]
@@ -158,7 +162,10 @@ class Tracking:
         """Figures over a part of the motion (all frames by default), JSON-ready.
 
         The tracking error is over the frames before the fall and divergence (``error_*``)
-        and over all frames of the part that were simulated (``error_all_*``).
+        and over all frames of the part that were simulated (``error_all_*``);
+        ``reachable_error_deg_rms`` is the error to the reference clamped into the joint
+        ranges, before the fall (the servos' own accuracy, without the targets they cannot
+        reach).
         """
         index = np.arange(self.n_frames)[part if part is not None else slice(None)]
         simulated = index if self.diverged_frame is None else index[index < self.diverged_frame]
@@ -170,6 +177,7 @@ class Tracking:
             "error_deg_rms": _rms(self.dof_error_deg[standing]),
             "error_deg_peak": _round(err[standing].max()) if standing.size else None,
             "error_all_deg_rms": _rms(self.dof_error_deg[simulated]),
+            "reachable_error_deg_rms": _rms(self.dof_reachable_error_deg[standing]),
             "limit_active_frames": int((self.limit_rows[simulated] > 0).sum()),
             "limit_active_pct": (round(100 * float((self.limit_rows[simulated] > 0).mean()),
                                        2) if simulated.size else None),
@@ -419,13 +427,18 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
     error = np.full((n_frames, hinge_q.size), np.nan)
     simulated = np.isfinite(qpos[:, 0])
     error[simulated] = _wrap_rad(qpos[simulated][:, hinge_q] - ref[simulated][:, hinge_q])
+    low, high = np.deg2rad(layout.range_deg.T)
+    reachable = np.full_like(error, np.nan)
+    reachable[simulated] = (qpos[simulated][:, hinge_q]
+                            - np.clip(_wrap_rad(ref[simulated][:, hinge_q]), low, high))
     warnings = {name: int(data.warning[int(getattr(mujoco.mjtWarning, name))].number)
                 for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING"}
     order = np.argsort(-joint_frames, kind="stable")
     return Tracking(
         mode=mode, fps=float(fps), timestep_s=float(sim.opt.timestep), steps=steps,
         wall_s=wall, hinge_names=layout.names, qpos=qpos,
-        dof_error_deg=np.rad2deg(error), limit_rows=limit_rows, limit_steps=limit_steps,
+        dof_error_deg=np.rad2deg(error), dof_reachable_error_deg=np.rad2deg(reachable),
+        limit_rows=limit_rows, limit_steps=limit_steps,
         limit_joint_frames={joint_names[j].replace("_", ".", 1): int(joint_frames[j])
                             for j in order if joint_frames[j] > 0},
         self_contacts=self_contacts, self_depth_m=self_depth, torque_peak_nm=torque_peak,

@@ -126,6 +126,10 @@ def test_joint_limit_activity_names_the_joint(model02, catalog):
     clamped = track(model02, motion, "driven")
     assert clamped.qpos[-1, layout.qpos_address[hinge]] <= hi + 1e-3
     assert clamped.dof_error_deg[-1, hinge] == pytest.approx(-20, abs=3)
+    # ... while the servo does reach the reachable target, the limit itself.
+    assert abs(clamped.dof_reachable_error_deg[-1, hinge]) < 3
+    assert (clamped.summary()["reachable_error_deg_rms"]
+            < clamped.summary()["error_deg_rms"])
     # The joints on their limits at the zero posture: the clavicles' rz, whose range
     # ends at 0 on this skeleton ([-20, 0] and [0, 20]).
     assert {"lclavicle.rz", "rclavicle.rz"} <= set(clamped.limit_joint_frames)
