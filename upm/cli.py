@@ -72,9 +72,13 @@ def _limit_blas_threads() -> None:
     """
     import os
 
-    if any(os.environ.get(v) for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                        "MKL_NUM_THREADS")):
+    names = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    if any(os.environ.get(v) for v in names):
         return
+    # Libraries loaded later (scipy's own OpenBLAS, worker processes) read the variables;
+    # the ones already loaded (numpy's) are limited through threadpoolctl.
+    for v in names:
+        os.environ[v] = "1"
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1, user_api="blas")
