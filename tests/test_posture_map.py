@@ -14,7 +14,7 @@ from upm.class_maps import nearest_distance_deg, off_data_share
 from upm.errors import DataFileError, UsageError
 from upm.posture_map import UniformPostureMap, default_radius_deg, load_map
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
-from upm.som import KohonenSOM, default_grid, train_som_class
+from upm.som import default_grid, train_som_class
 from upm.upm_training import _batch_step, _GrowingMap, _MapSearch, train_upm_class
 
 # -- exact search under wrapped distance ----------------------------------------------
@@ -204,10 +204,11 @@ def test_key_posture_of_the_bent_elbow_stays_on_the_data():
 def test_on_the_train_split(catalog):
     """Trains both maps on the whole train split once; every real-data figure here."""
     from upm.class_maps import postures_of_clips
+    from upm.map_cache import trained_map
 
     x, names = postures_of_clips(catalog, catalog.names("train"))
-    upm = UniformPostureMap().fit(x, clip_names=names)
-    som = KohonenSOM().fit(x, clip_names=names)
+    # The study's maps: trained here, or by whichever test needed them first (cached).
+    upm, som = trained_map(catalog, "upm"), trained_map(catalog, "som")
     for c in CLASS_NAMES:
         sub = x[:, CLASS_SLICES[c]]
         radius = upm.radius_deg[c]

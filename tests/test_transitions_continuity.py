@@ -11,9 +11,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tests.transition_data import PAIRS, Anonymous, pair, sources, window_edges
+from tests.transition_data import PAIRS, pair, sources, window_edges
 from upm.angles import angle_diff_deg
+from upm.posture_map import UniformPostureMap
 from upm.skeleton import POSTURE_DOF_NAMES
+from upm.som import KohonenSOM
 from upm.transitions import METHODS, ClassNearest, NearestPosture, transition
 
 PROMISES = {"upm": "C1", "som": "C1", "classnn": "C1", "snap": "C1", "linear": "C0",
@@ -83,9 +85,9 @@ def test_joins_across_the_wrap(data_dir, method):
     # Key sources that know postures near +-180 in that DOF: fitted on the two clips.
     own = np.concatenate([before.posture_deg, after.posture_deg])
     kind = METHODS[method].key_kind
-    source = {"classnn": ClassNearest(own), "snap": NearestPosture(own)}.get(kind)
-    if kind in ("upm", "som"):
-        source = Anonymous(ClassNearest(own))
+    makers = {"classnn": ClassNearest, "snap": NearestPosture,
+              "upm": lambda x: UniformPostureMap().fit(x), "som": lambda x: KohonenSOM().fit(x)}
+    source = makers[kind](own) if kind in makers else None
     result = transition(method, before, after, 20, 0.5, source)
     (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
     assert c0_a <= 0 and c0_b <= 0

@@ -26,17 +26,6 @@ PAIRS = (
 CLIP_FRAMES = 40
 
 
-class Anonymous:
-    """A key-posture source without a ``kind``: lets the ``upm`` and ``som`` methods run
-    on the classnn source until the trained maps are merged."""
-
-    def __init__(self, source):
-        self._source = source
-
-    def key_posture(self, a_deg, b_deg, alpha=0.5):
-        return self._source.key_posture(a_deg, b_deg, alpha)
-
-
 @functools.lru_cache(maxsize=2)
 def catalog_of(data_dir) -> Catalog:
     return Catalog(data_dir)
@@ -45,13 +34,15 @@ def catalog_of(data_dir) -> Catalog:
 @functools.lru_cache(maxsize=2)
 def sources(data_dir) -> dict:
     """Key-posture source per key method: classnn and snap fitted on the train split (every
-    2nd frame: enough, and half the fitting time); upm and som stand-ins (see Anonymous)."""
+    2nd frame: enough, and half the fitting time); the UPM and SOM of the study (trained
+    on the train split once, then cached: upm.map_cache)."""
+    from upm.map_cache import trained_map
     from upm.transitions import ClassNearest, NearestPosture, training_postures
 
-    postures = training_postures(catalog_of(data_dir), "train", step=2)
-    classnn = ClassNearest(postures)
-    return {"classnn": classnn, "snap": NearestPosture(postures), "upm": Anonymous(classnn),
-            "som": Anonymous(classnn)}
+    catalog = catalog_of(data_dir)
+    postures = training_postures(catalog, "train", step=2)
+    return {"classnn": ClassNearest(postures), "snap": NearestPosture(postures),
+            "upm": trained_map(catalog, "upm"), "som": trained_map(catalog, "som")}
 
 
 def pair(data_dir, index: int, frames: int = CLIP_FRAMES):

@@ -65,9 +65,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _limit_blas_threads() -> None:
+    """One BLAS thread, unless the user chose a number (OMP/OPENBLAS/MKL_NUM_THREADS).
+
+    The arrays here are small (a window of 20-40 frames x 63 DOFs): a multi-threaded BLAS
+    only adds contention; the spacetime optimisation ran 2-30x slower with it on a loaded
+    2-core machine.
+    """
+    import os
+
+    names = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    if any(os.environ.get(v) for v in names):
+        return
+    # Libraries loaded later (scipy's own OpenBLAS, worker processes) read the variables;
+    # the ones already loaded (numpy's) are limited through threadpoolctl.
+    for v in names:
+        os.environ[v] = "1"
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1, user_api="blas")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     warnings.formatwarning = _one_line_warning
+    _limit_blas_threads()
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -8,17 +8,6 @@ import warnings
 from upm.errors import UsageError
 
 
-def load_posture_map(path):
-    """A trained map (UPM or SOM) from ``path`` (``upm.posture_map.load_map``)."""
-    try:
-        from upm.posture_map import load_map
-    except ImportError:
-        raise UsageError("this installation has no posture maps (upm.posture_map is missing); "
-                         "use --method classnn, snap, linear, slerp, inertialize or "
-                         "spacetime") from None
-    return load_map(path)
-
-
 def key_source_for(method: str, map_path, catalog):
     """The key-posture source for ``method``.
 
@@ -47,7 +36,9 @@ def key_source_for(method: str, map_path, catalog):
                              "classnn, snap")
         if not os.path.isfile(map_path):
             raise UsageError(f"--map {map_path}: no such file")
-        source = load_posture_map(map_path)
+        from upm.class_maps import load_map
+
+        source = load_map(map_path)
         kind = getattr(source, "kind", None)
         if isinstance(kind, str) and kind != spec.key_kind:
             raise UsageError(f"{map_path} holds a {kind!r} map; --method {method} needs a "
