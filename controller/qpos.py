@@ -17,6 +17,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -27,17 +29,55 @@ from upm.rotations import euler_to_matrix
 from upm.skeleton import POSTURE_DOF_NAMES, POSTURE_SIZE, Skeleton
 
 
-def _joint_map(model) -> tuple[np.ndarray, np.ndarray, int]:
-    """Posture indices that have a hinge, their qpos addresses, and the free joint's."""
+@dataclass(frozen=True)
+class JointLayout:
+    """Where a humanoid's joints sit in ``qpos``, ``qvel`` and the posture.
+
+    Attributes
+    ----------
+    posture_index : ndarray of int, shape (H,)
+        For each hinge (in model joint order), its index in the 63-value posture.
+    qpos_address : ndarray of int, shape (H,)
+        Each hinge's ``qpos`` address.
+    dof_address : ndarray of int, shape (H,)
+        Each hinge's ``qvel`` (DOF) address.
+    range_deg : ndarray, shape (H, 2)
+        Each hinge's range (the ASF limits), degrees.
+    free_qpos : int
+        The free root joint's ``qpos`` address (7 values: position, quaternion w x y z).
+    free_dof : int
+        Its ``qvel`` address (6 values: linear velocity in the world frame, angular
+        velocity in the root's own frame).
+    names : tuple of str
+        Each hinge's posture DOF name (``"lfemur.rx"``).
+    """
+
+    posture_index: np.ndarray
+    qpos_address: np.ndarray
+    dof_address: np.ndarray
+    range_deg: np.ndarray
+    free_qpos: int
+    free_dof: int
+    names: tuple[str, ...]
+
+
+def joint_layout(model) -> JointLayout:
+    """The :class:`JointLayout` of a model made by :func:`humanoid_xml.build_mjcf`.
+
+    Raises
+    ------
+    ValueError
+        If a hinge is not named after a posture DOF, or there is no free root joint.
+    """
     import mujoco
 
-    posture_index, qpos_address = [], []
-    free = -1
+    posture_index, qpos_address, dof_address, ranges, names = [], [], [], [], []
+    free_qpos = free_dof = -1
     for j in range(model.njnt):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
         jtype = model.jnt_type[j]
         if jtype == mujoco.mjtJoint.mjJNT_FREE:
-            free = int(model.jnt_qposadr[j])
+            free_qpos, free_dof = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
             continue
         if jtype != mujoco.mjtJoint.mjJNT_HINGE:
             continue
@@ -47,9 +87,22 @@ def _joint_map(model) -> tuple[np.ndarray, np.ndarray, int]:
             raise ValueError(f"model hinge {name!r} is not a posture DOF (<bone>_<rx|ry|rz>)")
         posture_index.append(POSTURE_DOF_NAMES.index(dof_name))
         qpos_address.append(int(model.jnt_qposadr[j]))
-    if free < 0:
+        dof_address.append(int(model.jnt_dofadr[j]))
+        ranges.append(np.rad2deg(model.jnt_range[j]))
+        names.append(dof_name)
+    if free_qpos < 0:
         raise ValueError("the model has no free root joint")
-    return np.array(posture_index, dtype=int), np.array(qpos_address, dtype=int), free
+    return JointLayout(posture_index=np.array(posture_index, dtype=int),
+                       qpos_address=np.array(qpos_address, dtype=int),
+                       dof_address=np.array(dof_address, dtype=int),
+                       range_deg=np.array(ranges, dtype=float).reshape(-1, 2),
+                       free_qpos=free_qpos, free_dof=free_dof, names=tuple(names))
+
+
+def _joint_map(model) -> tuple[np.ndarray, np.ndarray, int]:
+    """Posture indices that have a hinge, their qpos addresses, and the free joint's."""
+    layout = joint_layout(model)
+    return layout.posture_index, layout.qpos_address, layout.free_qpos
 
 
 def root_to_qpos(root, root_axis_order: str = "XYZ") -> np.ndarray:

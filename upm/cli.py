@@ -28,6 +28,8 @@ COMMANDS: dict[str, str] = {
     "transition": "upm.commands.transition",
     "sequence": "upm.commands.sequence",
     "model": "upm.commands.model",
+    "check": "upm.commands.check",
+    "simulate": "upm.commands.simulate",
 }
 
 

@@ -1,0 +1,154 @@
+"""Every physical check of one motion in one call: the kinematic checks per frame, the
+inverse-dynamics residual, and the tracking simulations, assembled into a report
+(:mod:`controller.report`). ``upm check`` and ``upm simulate`` are thin layers on this."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+#: Free-root runs per window start this long before the window ...
+WINDOW_LEAD_S = 0.5
+#: ... and end this long after it.
+WINDOW_TAIL_S = 0.5
+
+
+def settings(tracking_modes=()) -> dict:
+    """The thresholds and methods of the checks, JSON-ready (units in the names)."""
+    from controller.contacts import SELF_COLLISION_DEPTH_M
+    from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
+    from controller.tracking import FALL_FRACTION, MAX_STEP_S
+    from controller.validity import FLOOR_TOLERANCE_M
+    from upm.limits import LIMIT_TOLERANCE_DEG
+
+    out = {
+        "limit_tolerance_deg": LIMIT_TOLERANCE_DEG,
+        "self_collision_depth_mm": 1000 * SELF_COLLISION_DEPTH_M,
+        "floor_tolerance_mm": 1000 * FLOOR_TOLERANCE_M,
+        "dynamics": {
+            "lowpass_hz": LOWPASS_HZ,
+            "support_distance_m": SUPPORT_DISTANCE_M,
+            "friction": FRICTION,
+            "force_unit": "body weight",
+            "torque_unit": "body weight x stature (torque about the root)",
+        },
+    }
+    if tracking_modes:
+        out["tracking"] = {
+            "modes": list(tracking_modes),
+            "max_step_s": MAX_STEP_S,
+            "fall_fraction": FALL_FRACTION,
+            "servo_targets": "reference hinge angles, linearly interpolated, taken kv/kp "
+                             "ahead (a velocity reference for the damping)",
+            "driven_root": "free joint qpos/qvel set from the reference before every step",
+            "window_free_lead_s": WINDOW_LEAD_S,
+            "window_free_tail_s": WINDOW_TAIL_S,
+        }
+    return out
+
+
+def motion_description(model, motion, model_path=None) -> dict:
+    """Name, frames, rate and body figures of a motion on its model, JSON-ready."""
+    from controller.body import body_figures
+
+    figures = body_figures(model)
+    source = motion.skeleton.source.replace("\\", "/").rsplit("/", 1)[-1]
+    return {
+        "name": motion.name,
+        "frames": motion.n_frames,
+        "fps": motion.fps,
+        "seconds": round(motion.duration_s, 4),
+        "skeleton": source,
+        "model": Path(model_path).name if model_path is not None else None,
+        "mass_kg": round(figures.mass_kg, 3),
+        "weight_n": round(figures.weight_n, 3),
+        "stature_m": round(figures.stature_m, 4),
+    }
+
+
+def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
+                     tail_s: float = WINDOW_TAIL_S) -> list[dict]:
+    """Per window, a free-root simulation from the reference state ``lead_s`` before the
+    window to ``tail_s`` after it: does the character get through it standing?
+
+    Returns
+    -------
+    list of dict
+        ``{"free_window": {"start", "stop", "fell", "fall_frame" (of the whole motion),
+        "fall_in_window", "error_deg_rms" (window frames, before any fall), ...}}``.
+    """
+    from controller.qpos import to_qpos
+    from controller.tracking import track_qpos
+
+    qpos = to_qpos(model, motion)
+    n = motion.n_frames
+    out = []
+    for window in windows:
+        w0, w1, _ = window.indices(n)
+        a = max(0, w0 - round(lead_s * motion.fps))
+        b = min(n, w1 + round(tail_s * motion.fps))
+        run = track_qpos(model, qpos[a:b], motion.fps, "free")
+        inside = slice(w0 - a, w1 - a)
+        fall = None if run.fall_frame is None else a + run.fall_frame
+        summary = run.summary(inside)
+        out.append({"free_window": {
+            "start": a, "stop": b, "fell": run.fell, "fall_frame": fall,
+            "fall_in_window": fall is not None and fall < w1,
+            "error_deg_rms": summary["error_deg_rms"],
+            "limit_active_frames": summary["limit_active_frames"],
+            "self_collision_frames": summary["self_collision_frames"],
+            "diverged_frame": None if run.diverged_frame is None else a + run.diverged_frame,
+            "warnings": run.warnings,
+        }})
+    return out
+
+
+def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
+            pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
+            model_path=None):
+    """Run the checks on a motion and build its report.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The humanoid of the motion's skeleton.
+    motion : upm.Motion
+    kind : str
+        The report's kind (``"check"``, ``"simulate"``).
+    windows : sequence of slice
+        Transition windows within the motion.
+    window_meta : list of dict, optional
+        Extra fields per window for the report.
+    pieces : list of (str, slice), optional
+    dynamics : bool
+        Compute the inverse-dynamics residual.
+    tracking_modes : sequence of str
+        Tracking simulations of the whole motion (``"free"``, ``"driven"``).
+    window_free : bool
+        Also a free-root run around each window (:func:`window_free_runs`).
+    model_path : path-like, optional
+        For the report's description.
+
+    Returns
+    -------
+    report : dict
+    results : dict
+        ``validity``, ``residual`` (or None) and ``tracking`` (mode -> Tracking), for
+        callers that want the arrays.
+    """
+    from controller.dynamics import root_residual
+    from controller.qpos import to_qpos
+    from controller.report import build_report
+    from controller.tracking import track
+    from controller.validity import check_motion
+
+    windows = tuple(windows)
+    validity = check_motion(model, motion, windows)
+    residual = root_residual(model, to_qpos(model, motion), motion.fps) if dynamics else None
+    tracking = {mode: track(model, motion, mode) for mode in tracking_modes}
+    per_window = (window_free_runs(model, motion, windows)
+                  if window_free and windows else None)
+    report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
+                          settings=settings(tuple(tracking_modes)), residual=residual,
+                          tracking=tracking, window_meta=window_meta,
+                          window_tracking=per_window, pieces=pieces)
+    return report, {"validity": validity, "residual": residual, "tracking": tracking}

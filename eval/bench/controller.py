@@ -1,0 +1,118 @@
+"""The physical checks' speed, each against raw MuJoCo on the same model in the same run:
+
+- kinematic checks (:func:`controller.validity.check_motion`: limits, self-collision,
+  floor, per frame) against a bare loop of ``mj_kinematics`` + ``mj_collision`` over the
+  same states;
+- the inverse-dynamics residual (:func:`controller.dynamics.root_residual`: filter,
+  finite differences, ``mj_inverse``, floor support by NNLS) against a bare loop of
+  ``mj_inverse`` over the same states;
+- tracking (:func:`controller.tracking.track`, both modes) in physics steps per second
+  against a bare loop that feeds ``mj_step`` the same inputs (the plan's targets, and the
+  driven root's state) with none of the per-step bookkeeping (limit rows, samples,
+  warnings) — the same physics, so the ratio is the cost of the measuring;
+- (full run only) the kinematic checks of every frame of every clip, reading included.
+"""
+
+from __future__ import annotations
+
+import time
+
+from eval.bench import BenchContext, timeit_best
+
+NAME = "controller"
+
+
+def run(context: BenchContext) -> dict:
+    import mujoco
+
+    from controller import to_qpos
+    from controller.dynamics import root_residual
+    from controller.tracking import plan_tracking, track
+    from controller.validity import check_motion
+    from humanoid_xml import catalog_model_path, load_model
+    from upm.catalog import Catalog
+
+    catalog = Catalog(context.data_dir)
+    clip = "02_01" if "02_01" in catalog else catalog.names()[0]
+    motion = catalog.load(clip)
+    if context.quick:
+        motion = motion.frames(0, 120)
+    model = load_model(catalog_model_path(catalog, clip))
+    data = mujoco.MjData(model)
+    qpos = to_qpos(model, motion)
+    n = len(qpos)
+    repeat = 2 if context.quick else 5
+
+    def raw_kinematics_collision():
+        for q in qpos:
+            data.qpos[:] = q
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_collision(model, data)
+
+    raw_kin_s = timeit_best(raw_kinematics_collision, repeat=repeat)
+    check_s = timeit_best(lambda: check_motion(model, motion), repeat=repeat)
+
+    def raw_inverse():
+        for q in qpos:
+            data.qpos[:] = q
+            mujoco.mj_inverse(model, data)
+
+    raw_inv_s = timeit_best(raw_inverse, repeat=repeat)
+    residual_s = timeit_best(lambda: root_residual(model, qpos, motion.fps), repeat=repeat)
+
+    out = {
+        "clip": clip,
+        "frames": n,
+        "kinematic_check_frames_per_s": n / check_s,
+        "reference_kinematics_collision_per_s": n / raw_kin_s,
+        "kinematic_check_ratio_to_raw": raw_kin_s / check_s,
+        "residual_frames_per_s": n / residual_s,
+        "reference_mj_inverse_per_s": n / raw_inv_s,
+        "residual_ratio_to_raw": raw_inv_s / residual_s,
+    }
+    for mode in ("driven", "free"):
+        result = max((track(model, motion, mode) for _ in range(repeat)),
+                     key=lambda r: r.steps_per_s)
+        plan = plan_tracking(model, qpos, motion.fps, mode)
+        sim, sim_data = plan.model, plan.start_data()
+
+        def raw_steps(plan=plan, sim=sim, sim_data=sim_data, free=(slice(0, 7), slice(0, 6))):
+            if plan.root_qpos is None:
+                for k in range(plan.steps):
+                    sim_data.ctrl[:] = plan.ctrl[k]
+                    mujoco.mj_step(sim, sim_data)
+            else:
+                for k in range(plan.steps):
+                    sim_data.ctrl[:] = plan.ctrl[k]
+                    sim_data.qpos[free[0]] = plan.root_qpos[k]
+                    sim_data.qvel[free[1]] = plan.root_qvel[k]
+                    mujoco.mj_step(sim, sim_data)
+
+        raw_s = timeit_best(lambda f=raw_steps, p=plan, d=sim_data: (_reset(p, d), f()),
+                            repeat=repeat)
+        out[f"tracking_{mode}_steps"] = result.steps
+        out[f"tracking_{mode}_steps_per_s"] = result.steps_per_s
+        out[f"reference_mj_step_{mode}_per_s"] = plan.steps / raw_s
+        out[f"tracking_{mode}_ratio_to_raw"] = result.steps_per_s / (plan.steps / raw_s)
+    if not context.quick:
+        from controller.validity import calibrate
+
+        start = time.perf_counter()
+        calibration = calibrate(catalog)
+        seconds = time.perf_counter() - start
+        frames = calibration.totals()["frames"]
+        out["calibration_all_clips_s"] = seconds
+        out["calibration_frames"] = frames
+        out["calibration_frames_per_s"] = frames / seconds
+    return out
+
+
+def _reset(plan, data) -> None:
+    """Put ``data`` back in the plan's first state."""
+    import mujoco
+
+    mujoco.mj_resetData(plan.model, data)
+    data.qpos[:] = plan.start_qpos
+    data.qvel[:] = plan.start_qvel
+    data.ctrl[:] = plan.ctrl[0]
+    mujoco.mj_forward(plan.model, data)

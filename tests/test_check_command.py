@@ -1,0 +1,105 @@
+"""``upm check``: an AMC file with its ASF, a clip or a clip's frames, a whole split; the
+JSON report and its CSV summary; one-line errors with exit code 2."""
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from controller.report import SCHEMA, SCHEMA_VERSION
+from upm.cli import main
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("UPM_CACHE", str(tmp_path_factory.getbasetemp() / "check-cache"))
+
+
+def test_check_an_amc_file_with_its_asf(tmp_path, data_dir, capsys):
+    for name in ("02.asf", "02_03.amc"):
+        shutil.copy(data_dir / "02" / name, tmp_path / name)
+    code = main(["check", str(tmp_path / "02_03.amc"), "--asf", str(tmp_path / "02.asf"),
+                 "--json"])
+    assert code == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["schema"] == SCHEMA and report["schema_version"] == SCHEMA_VERSION
+    assert report["kind"] == "check"
+    assert report["motion"]["frames"] == 173 and report["motion"]["fps"] == 120.0
+    assert len(report["frames"]) == 173
+    totals = report["totals"]["kinematic"]
+    # The run 02_03 leaves its limits in every frame (clips calibration: 100 %).
+    assert totals["limit_violation_frames"] == 173 and totals["valid_frames"] == 0
+    frame = report["frames"][0]
+    assert frame["limit_violation"] and frame["limit_dofs"] and not frame["valid"]
+    assert 0 <= frame["residual_force_bw"] and frame["support_points"] >= 0
+    assert report["settings"]["floor_tolerance_mm"] == 10.0
+
+
+def test_check_a_clip_prints_totals_and_invalid_frames(data_dir, capsys):
+    assert main(["check", "02_01@0:120", "--data", str(data_dir)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("02_01@0:120: 120 frames at 120 fps")
+    for words in ("valid frames", "joint-limit violation", "self-collision",
+                  "floor penetration", "residual force", "invalid frames: 0-"):
+        assert words in out
+
+
+def test_report_file_and_csv_are_written(tmp_path, data_dir, capsys):
+    out = tmp_path / "reports" / "walk.json"
+    assert main(["check", "16_15", "--data", str(data_dir), "--report", str(out),
+                 "--no-dynamics"]) == 0
+    capsys.readouterr()
+    report = json.loads(out.read_text())
+    assert "dynamics" not in report["totals"]
+    assert "residual_force_bw" not in report["frames"][0]
+    rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+    assert [r["part"] for r in rows] == ["all"]
+    assert int(rows[0]["frames"]) == 471
+    assert rows[0]["valid_frames"] == str(report["totals"]["kinematic"]["valid_frames"])
+    assert not list(out.parent.glob(".tmp-*"))
+
+
+def test_check_a_split_prints_the_calibration(tmp_path, data_dir, capsys):
+    out = tmp_path / "calibration.json"
+    assert main(["check", "--split", "test", "--data", str(data_dir), "--json",
+                 "--report", str(out)]) == 0
+    calibration = json.loads(capsys.readouterr().out)
+    assert json.loads(out.read_text()) == calibration
+    rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+    assert [r["clip"] for r in rows][-2:] == ["total all", "total test"]
+    assert rows[0]["clip"] == "02_01" and int(rows[-1]["frames"]) == 3079
+    assert [r["clip"] for r in calibration["clips"]] == [
+        "02_01", "02_03", "03_01", "05_11", "16_15", "83_26", "141_04"]
+    total = calibration["totals"]
+    assert total["frames"] == 3079 and 50 < total["limit_violation_pct"] < 75
+    assert calibration["splits"]["test"] == total
+    assert 0 < total["residual_force_bw_mean"] < 1
+
+
+def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys):
+    # The installed command line, once: exit code 2 and one line on stderr.
+    result = subprocess.run([sys.executable, "-m", "upm", "check"], capture_output=True,
+                            text=True, env={**os.environ, "UPM_CACHE": str(tmp_path / "c")})
+    assert result.returncode == 2
+    assert result.stderr.strip().startswith("upm check: error: give a motion")
+    amc = tmp_path / "x.amc"
+    amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\n")
+    asf = tmp_path / "02.asf"
+    shutil.copy(data_dir / "02" / "02.asf", asf)
+    for args, message in [
+        ([str(amc)], "needs its skeleton"),
+        ([str(tmp_path / "missing.amc"), "--asf", str(asf)], "no such file"),
+        ([str(amc), "--asf", str(asf)], "x.amc"),
+        (["02_01", "--split", "test", "--data", str(data_dir)], "not both"),
+        (["99_99", "--data", str(data_dir)], "no clip '99_99'"),
+        (["02_01@500:900", "--data", str(data_dir)], "out of range"),
+        (["02_01", "--asf", str(asf), "--data", str(data_dir)], "go with an AMC file"),
+    ]:
+        assert main(["check", *args]) == 2, args
+        err = capsys.readouterr().err
+        assert message in err, (args, err)
+        assert len(err.strip().splitlines()) == 1, err
