@@ -321,26 +321,18 @@ def _write_gif(images, rate: float, path: Path) -> None:
 
 
 def _write_mp4(images, rate: float, path: Path) -> None:
-    import tempfile
-
     import imageio_ffmpeg
 
-    path.parent.mkdir(parents=True, exist_ok=True)
+    from upm.fileio import atomic_path
+
     height, width = images.shape[1:3]
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".mp4", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         writer = imageio_ffmpeg.write_frames(tmp, (width, height), fps=rate, codec="libx264",
                                              macro_block_size=8, ffmpeg_log_level="error")
         writer.send(None)
         for image in images:
             writer.send(np.ascontiguousarray(image))
         writer.close()
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def has_display() -> bool:
