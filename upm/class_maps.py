@@ -91,8 +91,9 @@ def nearest_distance_deg(points_deg, neurons_deg) -> np.ndarray:
     return np.sqrt(dist_sq)
 
 
-def postures_of_clips(catalog, names) -> tuple[np.ndarray, list[str]]:
-    """Every frame of the named clips, wrapped: ``(N, 63)`` degrees, and the names.
+def postures_of_clips(catalog, names, step: int = 1) -> tuple[np.ndarray, list[str]]:
+    """Every ``step``-th frame of the named clips, wrapped: ``(N, 63)`` degrees, and the
+    names.
 
     Clips are read at their catalogue rate; for a posture map the rate only changes how
     densely a motion is sampled, not which postures are in the data.
@@ -102,8 +103,8 @@ def postures_of_clips(catalog, names) -> tuple[np.ndarray, list[str]]:
     names = list(names)
     if not names:
         raise UsageError("no training clips selected")
-    frames = [catalog.load(n).posture_deg for n in progress(names, desc="reading clips",
-                                                             unit="clip")]
+    frames = [catalog.load(n).posture_deg[::step]
+              for n in progress(names, desc="reading clips", unit="clip")]
     return wrap_deg(np.concatenate(frames)), names
 
 

@@ -189,8 +189,11 @@ def training_postures(catalog, split: str = "train", step: int = 1) -> np.ndarra
     Returns
     -------
     ndarray, shape (N, 63)
+        Wrapped to [-180, 180) (the sources compare wrapped differences anyway).
     """
+    from upm.class_maps import postures_of_clips
+
     names = catalog.names(split or None)
     if not names:
         raise UsageError(f"no clips of split {split!r} under {catalog.root}")
-    return np.concatenate([catalog.load(n).posture_deg[::step] for n in names])
+    return postures_of_clips(catalog, names, step)[0]
