@@ -480,7 +480,8 @@ def servo_lead_s(model) -> np.ndarray:
     A position servo pushes ``kp (target - q) - kv qdot``; with the target taken ``kv/kp``
     ahead, ``kp (q_ref(t + kv/kp) - q) - kv qdot ~ kp (q_ref - q) + kv (qdot_ref - qdot)``
     to first order: the damping then acts on the velocity error, not on the velocity, and
-    the servo does not lag (53 ms for the 6 Hz, critically damped servos)."""
+    the servo does not lag (53 ms for the servos whose gains come from the inertia they
+    move, 6 Hz critically damped; a few ms for the stiffer joints that carry the body)."""
     kp = -model.actuator_biasprm[:, 1]
     kv = -model.actuator_biasprm[:, 2]
     return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)

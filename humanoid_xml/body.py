@@ -17,6 +17,9 @@ Geometry (radii for the reference adult, metres):
   middle of the bone, whose breadth is a fixed share of the subject's shoulder breadth
   (the lateral reach of the clavicles), its depth twice its radius;
 - pelvis (on the root body): a capsule from one hip-joint centre to the other;
+- heel (on each foot body): CMU has no heel bone (the foot bone runs from the ankle to
+  the ball of the foot), so the calcaneus is added as a capsule across the foot, behind
+  the ankle, its underside at the sole's level (see :func:`heel_capsule`);
 - hip joints and upperneck carry no geom of their own (the pelvis and neck cover them).
 """
 
@@ -64,6 +67,25 @@ ACROSS_TRUNK: dict[str, tuple[float, float]] = {
 }
 #: Radius of the pelvis capsule (hip-joint centre to hip-joint centre), reference adult.
 PELVIS_RADIUS_M = 0.078
+
+#: Foot length as a share of stature (Drillis & Contini 1966, in Winter 2009, Fig. 4.1).
+FOOT_LENGTH_H = 0.152
+#: Where the heel meets the floor, behind the ankle, as a share of the foot length. The
+#: calcaneus reaches 20-25 % of the foot length behind the ankle: 20 % in the foot split
+#: of ``generic_adult.json`` (heel 0.20, ankle to ball 0.55, ball to toe tip 0.25); Delp
+#: et al. (1990), the lower-limb model distributed with OpenSim as gait2392, puts the
+#: calcaneus origin (the heel's posterior-inferior corner) 4.9 cm behind the ankle
+#: (talocrural) centre of a 1.8 m man, 18 % of his 0.152 H foot length, the rounded back
+#: of the heel a centimetre or two further. The middle of the range is taken. It matters:
+#: the CMU rest pose puts the centre of mass 2.2-3.7 cm *behind* the ankles (a standing
+#: adult carries it about 5 cm in front), so the heel's reach is the whole margin; at
+#: 20 % subjects 01, 05 and 16 tip over backward after 2.3-2.8 s of standing still.
+HEEL_SHARE_OF_FOOT = 0.225
+#: Radius of the heel capsule (the rounded edge of the heel pad), reference adult, m.
+HEEL_RADIUS_M = 0.015
+#: Breadth of the heel (the capsule end to end, across the foot), reference adult, m:
+#: about a quarter of the foot length.
+HEEL_BREADTH_M = 0.065
 
 #: de Leva (1996), adult male segment masses as fractions of body mass, and the CMU bones
 #: that make up each segment (trunk split in its upper, middle and lower parts).
@@ -144,7 +166,7 @@ def capsules(skeleton: Skeleton) -> list[Capsule]:
     Returns
     -------
     list of Capsule
-        In ``skeleton.bone_names`` order.
+        In ``skeleton.bone_names`` order, then the heels (:func:`heel_capsule`).
     """
     scale = radius_scale(skeleton)
     offsets = vectors_to_mj(skeleton.offsets_m)
@@ -172,7 +194,68 @@ def capsules(skeleton: Skeleton) -> list[Capsule]:
                 name = bone if len(rule) == 1 else f"{bone}_{k + 1}"
                 out.append(Capsule(name, bone, start * offsets[b], stop * offsets[b],
                                    radius * scale))
+    foot_length = FOOT_LENGTH_H * stature_m(skeleton, out)
+    for side in "lr":
+        heel = heel_capsule(skeleton, out, f"{side}foot", foot_length, scale)
+        if heel is not None:
+            out.append(heel)
     return out
+
+
+def heel_capsule(skeleton: Skeleton, geoms: list[Capsule], foot: str, foot_length_m: float,
+                 scale: float) -> Capsule | None:
+    """The heel of a foot: a capsule across the foot behind the ankle.
+
+    Placed in the rest pose (every body frame aligned with the world): its axis is
+    horizontal, across the foot, :data:`HEEL_SHARE_OF_FOOT` of the foot length behind the
+    ankle (opposite the foot bone's horizontal direction), and its underside at the level
+    of the lowest point of the foot's and toes' other capsules (the sole), so that the
+    rest pose stands on heel and forefoot alike. The heel meets the floor along the
+    capsule's underside; its rounded back reaches one radius further.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    geoms : list of Capsule
+        The along-bone capsules, those of ``foot`` and of its child bones among them.
+    foot : str
+        The foot bone (``"lfoot"``).
+    foot_length_m : float
+        The foot length (:data:`FOOT_LENGTH_H` x stature).
+    scale : float
+        :func:`radius_scale` of the skeleton.
+
+    Returns
+    -------
+    Capsule or None
+        Named ``<foot>_heel``, on the foot body; None if the skeleton has no such bone or
+        its foot bone has no horizontal extent.
+    """
+    if foot not in skeleton.bone_names:
+        return None
+    b = skeleton.bone_index(foot)
+    offsets = vectors_to_mj(skeleton.offsets_m)
+    forward = offsets[b].copy()
+    forward[2] = 0.0
+    reach = float(np.linalg.norm(forward))
+    if reach < 1e-9:
+        return None
+    forward /= reach
+    lateral = np.array([-forward[1], forward[0], 0.0])
+    # The sole: the lowest point of the foot's capsules and its children's (the toes sit
+    # at the foot bone's end in the foot's frame).
+    children = {skeleton.bone_names[c] for c in np.flatnonzero(skeleton.parents == b)}
+    bottoms = [min(g.p0_m[2], g.p1_m[2]) - g.radius_m for g in geoms if g.bone == foot]
+    bottoms += [offsets[b][2] + min(g.p0_m[2], g.p1_m[2]) - g.radius_m
+                for g in geoms if g.bone in children]
+    if not bottoms:
+        return None
+    radius = HEEL_RADIUS_M * scale
+    half = max(0.5 * HEEL_BREADTH_M * scale - radius, 0.0)
+    centre = -HEEL_SHARE_OF_FOOT * foot_length_m * forward
+    centre[2] = min(bottoms) + radius
+    return Capsule(f"{foot}_heel", foot, centre - half * lateral, centre + half * lateral,
+                   radius)
 
 
 def stature_m(skeleton: Skeleton, geoms: list[Capsule]) -> float:

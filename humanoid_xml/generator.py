@@ -17,38 +17,55 @@ The model (``build_mjcf``):
   bones (hip joints, upperneck, wrists, fingers, thumbs) have no joint: they weld to their
   parent, keeping their offsets, exactly as in the project's kinematics.
 - **Geoms and masses** (:mod:`humanoid_xml.body`): capsules sized from the bones, masses
-  from de Leva's segment fractions of ``BMI 23 x stature^2``.
+  from de Leva's segment fractions of ``BMI 23 x stature^2``, and a heel on each foot
+  (CMU has no heel bone): a capsule across the foot 22.5 % of the foot length (0.152 x
+  stature) behind the ankle, its underside at the sole's level, so that the rest pose
+  stands on heel and forefoot.
 - **Collision.** Every geom collides with the floor and with every other body, except
   inside a weld group, between a weld group and its parent's (MuJoCo's parent filter),
   and the pairs of :data:`humanoid_xml.exclusions.EXCLUDED_PAIRS`.
+- **Joint limits that hold.** ``range`` is enforced by a stiff limit constraint
+  (``solreflimit`` :data:`LIMIT_SOLREF`: time constant 5 ms, critically damped;
+  ``solimplimit`` :data:`LIMIT_SOLIMP`: impedance 0.95 rising to 0.99 within 0.001 rad),
+  instead of MuJoCo's default (20 ms, 0.9-0.95) through which a servo pushing at its
+  strength went 4-10 degrees past the limit; now a few hundredths of a degree at rest
+  and under one degree at the moment of impact (measured in the tests).
 - **Actuators.** A position actuator per hinge, named like its joint, listed in posture
   order (``upm.skeleton.POSTURE_DOF_NAMES``, declared DOFs only), so a posture is a
   control vector (radians). ``ctrlrange`` is inherited from the joint range (radians).
-  Gains scale with what each joint moves: ``kp = I w^2`` and ``kv = 2 I w`` (critical
-  damping) with ``I`` the joint-space inertia of the hinge at rest (the diagonal of the
-  mass matrix: the inertia of everything the joint moves, about its axis, plus the
-  joint's 0.01 kg m^2 armature) and ``w = 2 pi x 6 Hz``. Damped position actuators need
-  the ``implicitfast`` integrator.
+  Gains (:mod:`humanoid_xml.servos`) scale with the mass each joint moves *and* the
+  load it bears: ``kp = max(I w^2, min(m g l, tau_max) / theta_sag)``, ``kv = 2 sqrt(kp
+  I)`` (critical damping on the inertia moved), with ``I`` the joint-space inertia of the
+  hinge at rest (the diagonal of the mass matrix: everything the joint moves, about its
+  axis, plus the joint's 0.01 kg m^2 armature), ``w = 2 pi x 6 Hz``, ``m`` the mass the
+  joint carries (for hip, knee, ankle and toes: the whole body but the joint's distal
+  part, as in stance; elsewhere the joint's subtree), ``l`` the distance from that
+  mass's centre to the hinge axis, ``tau_max`` the joint's strength and ``theta_sag = 2``
+  degrees the deflection at which the servo pushes with that torque. ``forcerange``
+  bounds each servo by the joint's strength (:mod:`humanoid_xml.strength`: published
+  peak isometric torques, per direction, scaled by the model's mass and stature), so
+  tracking cannot use superhuman torques. Damped position actuators need the
+  ``implicitfast`` integrator.
 - **Floor.** A plane at z = 0; the root's rest height puts the lowest geom on it.
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from humanoid_xml.body import Capsule, body_mass_kg, capsules, stature_m, with_masses
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from humanoid_xml.frames import vectors_to_mj
+from humanoid_xml.servos import servo_gains
+from humanoid_xml.strength import torque_limits_nm
 from upm.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
-GENERATOR_VERSION = "1"
-#: Natural frequency of each position servo, Hz (``kp = I (2 pi f)^2``).
-SERVO_FREQUENCY_HZ = 6.0
-#: Damping ratio of each position servo (``kv = 2 zeta I (2 pi f)``).
-SERVO_DAMPING_RATIO = 1.0
+GENERATOR_VERSION = "2"
+#: Joint limits: MuJoCo's constraint reference (time constant s, damping ratio) and
+#: impedance (d0, d_width, width rad, midpoint, power), see the module docstring.
+LIMIT_SOLREF = (0.005, 1.0)
+LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: Simulation time step, seconds.
 TIMESTEP_S = 0.002
 _HINGE_ORDER = ("rz", "ry", "rx")
@@ -141,7 +158,8 @@ def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
         "  </visual>",
         "  <default>",
         '    <default class="body">',
-        '      <joint type="hinge" limited="true" armature="0.01" damping="0"/>',
+        '      <joint type="hinge" limited="true" armature="0.01" damping="0" '
+        f'solreflimit="{_vec(LIMIT_SOLREF)}" solimplimit="{_vec(LIMIT_SOLIMP)}"/>',
         '      <geom type="capsule" condim="3" friction="1 0.005 0.0001" '
         'rgba="0.8 0.6 0.4 1"/>',
         '      <site size="0.01" group="4" rgba="1 0 0 1"/>',
@@ -169,38 +187,16 @@ def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
     return "\n".join(lines) + "\n"
 
 
-def _actuators(skeleton: Skeleton, inertia: dict[str, float]) -> list[str]:
-    omega = 2.0 * math.pi * SERVO_FREQUENCY_HZ
+def _actuators(skeleton: Skeleton, gains: dict, strength: dict) -> list[str]:
     lines = ["  <actuator>"]
     for joint in hinge_names(skeleton):
-        i = inertia[joint]
-        kp = float(f"{i * omega * omega:.3g}")
-        kv = float(f"{2.0 * SERVO_DAMPING_RATIO * i * omega:.3g}")
-        lines.append(f'    <position name="{joint}" joint="{joint}" kp="{_num(kp)}" '
-                     f'kv="{_num(kv)}" inheritrange="1"/>')
+        g = gains[joint]
+        lo, hi = strength[joint]
+        lines.append(f'    <position name="{joint}" joint="{joint}" kp="{_num(g.kp)}" '
+                     f'kv="{_num(g.kv)}" inheritrange="1" '
+                     f'forcerange="{_num(-lo)} {_num(hi)}"/>')
     lines.append("  </actuator>")
     return lines
-
-
-def _joint_inertia(xml: str) -> dict[str, float]:
-    """Diagonal of the joint-space mass matrix at rest (armature included), per hinge,
-    kg m^2."""
-    import mujoco
-
-    model = mujoco.MjModel.from_xml_string(xml)
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    unit, column = np.zeros(model.nv), np.zeros(model.nv)
-    out = {}
-    for j in range(model.njnt):
-        if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE:
-            dof = model.jnt_dofadr[j]
-            unit[:] = 0.0
-            unit[dof] = 1.0
-            mujoco.mj_mulM(model, data, column, unit)
-            # With the joint's armature: the inertia the servo actually drives.
-            out[mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)] = float(column[dof])
-    return out
 
 
 def build_mjcf(skeleton: Skeleton) -> str:
@@ -226,9 +222,13 @@ def build_mjcf(skeleton: Skeleton) -> str:
     root_height = -lowest
     summary = (f"stature {stature:.3f} m, mass {mass:.1f} kg, "
                f"{int(skeleton.declared.sum())} hinges")
-    draft = _document(skeleton, geoms, root_height, [], summary)
-    inertia = _joint_inertia(draft)
-    return _document(skeleton, geoms, root_height, _actuators(skeleton, inertia), summary)
+    import mujoco
+
+    draft = mujoco.MjModel.from_xml_string(_document(skeleton, geoms, root_height, [], summary))
+    strength = torque_limits_nm(hinge_names(skeleton), mass, stature)
+    gains = servo_gains(draft, strength)
+    return _document(skeleton, geoms, root_height, _actuators(skeleton, gains, strength),
+                     summary)
 
 
 def _rest_origin_z(skeleton: Skeleton) -> np.ndarray:

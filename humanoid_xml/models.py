@@ -13,7 +13,8 @@ from upm.errors import DataFileError, UsageError
 
 _PACKAGE = Path(__file__).resolve().parent
 #: The source files whose content decides a generated model.
-_GENERATOR_SOURCES = ("generator.py", "body.py", "exclusions.py", "frames.py")
+_GENERATOR_SOURCES = ("generator.py", "body.py", "exclusions.py", "frames.py", "servos.py",
+                      "strength.py")
 
 
 def default_model_path() -> Path:

@@ -16,6 +16,7 @@ from humanoid_xml import build_mjcf, default_model_path, generic_skeleton, hinge
 from humanoid_xml.body import BMI_KG_M2, SEGMENT_MASS_FRACTIONS, capsules, stature_m
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from humanoid_xml.frames import ASF_TO_MJ, vectors_to_mj
+from humanoid_xml.servos import SAG_DEG, SERVO_FREQUENCY_HZ, servo_gains
 from upm import Motion, read_amc, read_asf
 from upm.errors import DataFileError
 from upm.kinematics import forward_kinematics, global_transforms
@@ -229,11 +230,20 @@ def test_mass_is_bmi_times_stature_squared(skeletons, models):
     assert max(statures.values()) - min(statures.values()) > 0.1  # the subjects differ
 
 
-def test_actuators_drive_every_hinge_with_mass_scaled_gains(skeletons, models):
+def test_actuators_drive_every_hinge_with_load_scaled_gains(skeletons, models):
+    """kp = max(I w^2, min(m g l, strength) / theta_sag), kv = 2 sqrt(kp I): the arms'
+    gains come from the inertia they move (as in generator 1), the stance joints' from
+    the body they carry: the ankle reaches its full strength within 2 degrees (it had
+    23 N m/rad)."""
     model, skeleton = models["02"], skeletons["02"]
     assert model.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     names = [_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)]
     assert names == hinge_names(skeleton)  # posture order
+    strength = {_name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a): (-lo, hi)
+                for a, (lo, hi) in enumerate(model.actuator_forcerange)}
+    gains = servo_gains(model, strength)
+    omega = 2 * np.pi * SERVO_FREQUENCY_HZ
+    sag = np.deg2rad(SAG_DEG)
     kp = {}
     for a, name in enumerate(names):
         joint = model.actuator_trnid[a, 0]
@@ -242,10 +252,26 @@ def test_actuators_drive_every_hinge_with_mass_scaled_gains(skeletons, models):
         np.testing.assert_allclose(model.actuator_ctrlrange[a], model.jnt_range[joint])
         assert model.actuator_ctrllimited[a]
         kp[name] = model.actuator_gainprm[a, 0]
-        assert kp[name] > 0 and model.actuator_biasprm[a, 2] < 0  # damping
-    assert kp["lowerback_rx"] > kp["lfemur_rx"] > kp["ltibia_rx"] > kp["lfoot_rx"] > \
-        kp["ltoes_rx"]
-    assert kp["lhumerus_rz"] > kp["lradius_rx"] > kp["lhand_rx"]
+        kv = -model.actuator_biasprm[a, 2]
+        g = gains[name]
+        assert kp[name] == g.kp and kv == g.kv
+        assert g.strength_nm == max(strength[name])
+        held = min(g.load_kg * 9.81 * g.lever_m, g.strength_nm)
+        assert kp[name] == pytest.approx(max(g.inertia_kgm2 * omega ** 2, held / sag),
+                                         rel=5e-3)
+        assert kv == pytest.approx(2 * np.sqrt(kp[name] * g.inertia_kgm2), rel=5e-3)
+    assert kp["lhumerus_rz"] > kp["lradius_rx"] > kp["lhand_rx"]  # what the arm moves
+    assert {gains[n].rule for n in ("lhumerus_rz", "lradius_rx", "lhand_rx")} == {"inertia"}
+    # The ankle carries everything but the foot, its centre about a metre above.
+    foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "lfoot")
+    ankle = gains["lfoot_rx"]
+    assert ankle.rule == "load" and kp["lfoot_rx"] > 1000
+    # ... more than its strength: the servo reaches its strength at theta_sag.
+    assert ankle.load_torque_nm > ankle.strength_nm
+    assert kp["lfoot_rx"] == pytest.approx(ankle.strength_nm / sag, rel=5e-3)
+    assert ankle.load_kg == pytest.approx(model.body_mass.sum() - model.body_subtreemass[foot])
+    assert 0.7 < ankle.lever_m < 1.1
+    assert gains["ltibia_rx"].rule == "load"
 
 
 def test_servo_holds_a_posture(models, walk):

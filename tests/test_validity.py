@@ -149,12 +149,13 @@ def test_calibration_on_the_test_split(calibration, catalog):
     assert test["frames"] == 3079
     assert 50 < test["limit_violation_pct"] < 75
     assert calibration.clips["05_11"]["limit_violation_pct"] > 95
-    assert 20 < test["valid_pct"] < 50  # measured 34.1 %
+    assert 20 < test["valid_pct"] < 50  # measured 33.0 % (34.1 % before the heel)
 
 
 def test_calibration_on_every_clip(calibration):
-    """All 28,437 frames: 22.4 % valid, 76 % break a limit (mean largest excess 12.7
-    degrees), 16.2 % in self-collision, 5.9 % below the floor."""
+    """All 28,437 frames: 22.0 % valid, 76 % break a limit (mean largest excess 12.7
+    degrees), 16.8 % in self-collision, 7.9 % below the floor (22.4, 16.2 and 5.9 % before
+    the model had heels)."""
     total = calibration.totals()
     assert total["clips"] == 26 and total["frames"] == 28437
     assert 10 < total["valid_pct"] < 40
@@ -166,7 +167,10 @@ def test_calibration_on_every_clip(calibration):
     # Walks stay near their limits and rarely touch themselves; dances do not.
     assert walks["limit_excess_mean_deg"] < 5 < calibration.clips["05_06"]["limit_excess_mean_deg"]
     assert walks["self_collision_pct"] < 10
-    assert walks["floor_penetration_pct"] < 10
+    # Flat walks and runs: 10.0 % of frames more than 1 cm below the floor, 3.5 % before
+    # the heel; most of it 05_01 (29 %), whose ankle comes 1.6 cm lower than the model's
+    # standing ankle height with the foot dorsiflexed, so the heel dips up to 3.7 cm.
+    assert walks["floor_penetration_pct"] < 15
     assert walks["valid_pct"] > total["valid_pct"]
     for row in calibration.clips.values():
         assert row["valid_frames"] <= row["frames"] - max(row["limit_violation_frames"],
