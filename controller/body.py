@@ -19,7 +19,9 @@ class BodyFigures:
     weight_n : float
         ``mass_kg * |gravity|``, newtons.
     stature_m : float
-        Highest point of any geom above the floor at rest (top of the head), metres.
+        Standing height, metres: the stature the generator scaled the body's mass and
+        strength by (the model's ``stature_m`` numeric: top of the head to the soles with
+        the legs straightened), so every figure normalised by it uses the same height.
     pelvis_height_m : float
         Height of the root body (the pelvis, at the hip-joint centres' level) at rest.
     head_height_m : float
@@ -41,21 +43,16 @@ def body_figures(model) -> BodyFigures:
     data.qpos[:] = model.qpos0
     mujoco.mj_kinematics(model, data)
     mass = float(np.sum(model.body_mass))
-    capsule = model.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE
-    # A capsule's top: its centre plus its half-length along the axis' vertical part,
-    # plus its radius.
-    axis_z = np.abs(data.geom_xmat[capsule].reshape(-1, 3, 3)[:, 2, 2])
-    tops = (data.geom_xpos[capsule, 2] + model.geom_size[capsule, 1] * axis_z
-            + model.geom_size[capsule, 0])
+    stature = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, "stature_m")
     head_site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "root")
-    if head_site < 0 or root < 0:
-        raise ValueError("the model has no root body or head_end site (not a humanoid_xml "
-                         "model?)")
+    if head_site < 0 or root < 0 or stature < 0:
+        raise ValueError("the model has no root body, head_end site or stature_m numeric "
+                         "(not a humanoid_xml model?)")
     return BodyFigures(
         mass_kg=mass,
         weight_n=mass * float(np.linalg.norm(model.opt.gravity)),
-        stature_m=float(tops.max()) if tops.size else 0.0,
+        stature_m=float(model.numeric_data[model.numeric_adr[stature]]),
         pelvis_height_m=float(data.xpos[root, 2]),
         head_height_m=float(data.site_xpos[head_site, 2]),
     )

@@ -61,7 +61,7 @@ from humanoid_xml.strength import torque_limits_nm
 from upm.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
-GENERATOR_VERSION = "2"
+GENERATOR_VERSION = "3"
 #: Joint limits: MuJoCo's constraint reference (time constant s, damping ratio) and
 #: impedance (d0, d_width, width rad, midpoint, power), see the module docstring.
 LIMIT_SOLREF = (0.005, 1.0)
@@ -144,7 +144,7 @@ def model_name(skeleton: Skeleton) -> str:
 
 
 def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
-              actuators: list[str], summary: str) -> str:
+              actuators: list[str], summary: str, stature: float) -> str:
     name = model_name(skeleton)
     lines = [
         f'<mujoco model="{name}">',
@@ -153,6 +153,10 @@ def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
         f"       {summary} -->",
         '  <compiler angle="degree" autolimits="true"/>',
         f'  <option timestep="{_num(TIMESTEP_S)}" integrator="implicitfast"/>',
+        "  <custom>",
+        "    <!-- the stature the masses and strengths were scaled by (legs straightened) -->",
+        f'    <numeric name="stature_m" data="{_num(stature)}"/>',
+        "  </custom>",
         "  <visual>",
         '    <global offwidth="1280" offheight="720"/>',
         "  </visual>",
@@ -166,6 +170,8 @@ def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
         "    </default>",
         "  </default>",
         "  <asset>",
+        '    <texture name="sky" type="skybox" builtin="gradient" rgb1="0.55 0.7 0.85" '
+        'rgb2="0.15 0.2 0.25" width="256" height="256"/>',
         '    <texture name="grid" type="2d" builtin="checker" width="512" height="512" '
         'rgb1="0.25 0.3 0.35" rgb2="0.35 0.4 0.45"/>',
         '    <material name="grid" texture="grid" texrepeat="2 2" texuniform="true" '
@@ -224,11 +230,12 @@ def build_mjcf(skeleton: Skeleton) -> str:
                f"{int(skeleton.declared.sum())} hinges")
     import mujoco
 
-    draft = mujoco.MjModel.from_xml_string(_document(skeleton, geoms, root_height, [], summary))
+    draft = mujoco.MjModel.from_xml_string(_document(skeleton, geoms, root_height, [], summary,
+                                                     stature))
     strength = torque_limits_nm(hinge_names(skeleton), mass, stature)
     gains = servo_gains(draft, strength)
     return _document(skeleton, geoms, root_height, _actuators(skeleton, gains, strength),
-                     summary)
+                     summary, stature)
 
 
 def _rest_origin_z(skeleton: Skeleton) -> np.ndarray:
