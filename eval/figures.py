@@ -116,7 +116,7 @@ def plot_window_dof(path: str | os.PathLike, transitions: Mapping[str, object],
                       label=f"{label} key posture")
     axes.set_xlabel("frame (0 = last frame of clip 1)")
     axes.set_ylabel(f"{dof} (degrees)")
-    axes.set_title(title or f"{dof} across the transition")
+    axes.set_title(title or f"{dof} across the transition", fontsize=10)
     axes.grid(alpha=0.3)
     axes.legend(fontsize=7, loc="best")
     figure.tight_layout()
@@ -186,6 +186,9 @@ def plot_metric_chart(path: str | os.PathLike, statistics: dict, methods, window
                 ax.axhline(real["mean"] * scale, color=colour, ls="--", lw=1)
                 ax.axhspan(real["lo"] * scale, real["hi"] * scale, color=colour, alpha=0.08,
                            lw=0)
+        low, high = ax.get_ylim()
+        if low > 0 and high / low > 20:  # one method far above the rest (slerp's jerk)
+            ax.set_yscale("log")
         ax.set_xticks(x)
         ax.set_xticklabels(methods, rotation=45, ha="right", fontsize=8)
         better = "higher" if METRICS[metric].better == "higher" else "lower"

@@ -63,6 +63,8 @@ def protocol(result: StudyResult) -> dict:
             "flat_floor": f"both clips' own frames need a median root residual force below "
                           f"{FLAT_FLOOR_MAX_BW} body weights (a flat floor like the model's)",
             "residual_context_frames": RESIDUAL_CONTEXT,
+            "tracking": "not compared: with the root free the humanoid falls within about a "
+                        "second whatever it is given (no balance control)",
         },
     }
 
@@ -197,13 +199,14 @@ def write_figures(result: StudyResult, statistics: dict, out: Path) -> dict:
         "filmstrip": out / "filmstrip.png",
     }
     plot_window_dof(paths["fig13"], transitions, dof=example.dof,
-                    title=f"{example.dof} across the window ({label})")
+                    title=f"{example.dof} across the window, UPM vs linear\n{label}")
     plot_sequence_dof(paths["fig14"], transitions, example.dof,
-                      title=f"{example.dof} across the sequence ({label})")
+                      title=f"{example.dof} across the whole sequence, UPM vs linear\n{label}")
     plot_metric_chart(paths["metrics"], statistics, list(config.methods),
                       list(config.windows))
     write_filmstrip(paths["filmstrip"], result.data.model(pair.first.clip), transitions,
-                    title=f"every 5th frame around the window; {label}")
+                    title=f"UPM (top) and linear (bottom): every 5th frame around the window "
+                          f"(orange); {label}")
     return {"paths": {k: str(v.name) for k, v in paths.items()},
             "example": {"pair_id": example.pair_id, "dof": example.dof,
                         "window_frames": frames,

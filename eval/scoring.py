@@ -50,38 +50,44 @@ def foot_geoms(model) -> tuple[np.ndarray, np.ndarray]:
     return np.array(geoms), np.array(foot)
 
 
-def geom_bottoms(model, data, geoms) -> np.ndarray:
-    """Height of the lowest point of each geom (after ``mj_kinematics``), metres.
+def geom_bottoms(model, geoms, centres_m, rotations) -> np.ndarray:
+    """Height of the lowest point of geoms, metres, over any number of states.
 
     Exact for spheres, capsules, cylinders, boxes and ellipsoids.
 
     Parameters
     ----------
+    model : mujoco.MjModel
     geoms : ndarray of int, shape (G,)
+    centres_m : ndarray, shape (..., G, 3)
+        The geoms' centres (``data.geom_xpos``), z up.
+    rotations : ndarray, shape (..., G, 3, 3)
+        Their orientations (``data.geom_xmat``).
 
     Returns
     -------
-    ndarray, shape (G,)
+    ndarray, shape (..., G)
     """
     import mujoco
 
     kinds = model.geom_type[geoms]
     size = model.geom_size[geoms]
-    up = data.geom_xmat[geoms].reshape(-1, 3, 3)[:, 2, :]  # each local axis' z component
-    z = data.geom_xpos[geoms, 2]
+    up = rotations[..., 2, :]  # the z component of each local axis
     g = mujoco.mjtGeom
-    drop = np.full(len(geoms), np.nan)
+    drop = np.full(up.shape[:-1], np.nan)
     drop = np.where(kinds == g.mjGEOM_SPHERE, size[:, 0], drop)
-    drop = np.where(kinds == g.mjGEOM_CAPSULE, np.abs(size[:, 1] * up[:, 2]) + size[:, 0], drop)
+    drop = np.where(kinds == g.mjGEOM_CAPSULE, np.abs(size[:, 1] * up[..., 2]) + size[:, 0],
+                    drop)
     drop = np.where(kinds == g.mjGEOM_CYLINDER,
-                    np.abs(size[:, 1] * up[:, 2])
-                    + size[:, 0] * np.sqrt(np.clip(1.0 - up[:, 2] ** 2, 0.0, 1.0)), drop)
-    drop = np.where(kinds == g.mjGEOM_BOX, np.abs(size * up).sum(axis=1), drop)
-    drop = np.where(kinds == g.mjGEOM_ELLIPSOID, np.sqrt(((size * up) ** 2).sum(axis=1)), drop)
+                    np.abs(size[:, 1] * up[..., 2])
+                    + size[:, 0] * np.sqrt(np.clip(1.0 - up[..., 2] ** 2, 0.0, 1.0)), drop)
+    drop = np.where(kinds == g.mjGEOM_BOX, np.abs(size * up).sum(axis=-1), drop)
+    drop = np.where(kinds == g.mjGEOM_ELLIPSOID, np.sqrt(((size * up) ** 2).sum(axis=-1)),
+                    drop)
     if np.isnan(drop).any():
         raise ValueError("foot geoms must be spheres, capsules, cylinders, boxes or "
                          "ellipsoids")
-    return z - drop
+    return centres_m[..., 2] - drop
 
 
 def feet_over_frames(model, qpos) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -103,12 +109,13 @@ def feet_over_frames(model, qpos) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     qpos = np.atleast_2d(qpos)
     data = mujoco.MjData(model)
     centres = np.empty((qpos.shape[0], len(geoms), 3))
-    bottoms = np.empty((qpos.shape[0], len(geoms)))
+    rotations = np.empty((qpos.shape[0], len(geoms), 9))
     for t, q in enumerate(qpos):
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
         centres[t] = data.geom_xpos[geoms]
-        bottoms[t] = geom_bottoms(model, data, geoms)
+        rotations[t] = data.geom_xmat[geoms]
+    bottoms = geom_bottoms(model, geoms, centres, rotations.reshape(*rotations.shape[:2], 3, 3))
     return centres, bottoms, foot
 
 

@@ -230,6 +230,35 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
         f"real windows of the test clips exactly as a transition's window. Units and "
         f"definitions: results.json (`metrics`).",
     ]
+    ends = statistics["groups"]["end_self_collision"]
+    parts += [
+        "",
+        "Reading these tables:",
+        "",
+        "- Every method gets the same root (the velocity blend of upm.transitions.root): the "
+        "differences in residual force and foot skating between methods come from the joint "
+        "angles alone; their level is set mostly by that shared root and by the data (see "
+        "the calibration rows).",
+        "- Valid frames: an excess beyond the ASF limits counts only where it is beyond what "
+        "the two end postures already have (real CMU frames often break their limits); "
+        "self-collision and floor penetration count as they are. Clip 2's first posture B on "
+        f"clip 1's body is itself in self-collision in {ends['B']} of {protocol['pairs']} "
+        f"pairs (A in {ends['A']}): 'valid (added only)' also counts only self-collisions "
+        "between body pairs in contact at neither end.",
+        "- Linear and slerp stay between A and B on every DOF, so they add a limit excess "
+        "only where the short way round crosses a DOF's excluded arc; a window that moves "
+        "through a key posture, as real motion does, can add more.",
+        "- Jerk: third differences at 120 fps amplify the capture noise, so real windows "
+        "score above any smooth window; the metric ranks methods against each other (a C0 "
+        "join shows as a velocity jump).",
+        "- Residual force: read it on the flat-floor pairs; on the other clips the real data "
+        "alone needs about one body weight (the model's floor is flat).",
+        "- Foot skating uses the height threshold only: a swing foot skimming the floor "
+        "below 5 cm counts too, so real walks score well above zero; compare methods with "
+        "each other and with the calibration row.",
+        "- Tracking with a free root is not compared: the humanoid falls within about a "
+        "second whatever it is given (no balance control).",
+    ]
     for frames in protocol["windows"]:
         best = best_baseline(statistics, frames, methods)
         parts += [
@@ -323,7 +352,8 @@ def table4_markdown(timing: dict) -> str:
         f"Python {machine['python']}, numpy {machine['numpy']}, scipy {machine['scipy']}; "
         f"BLAS threads per process: {machine['blas_threads']}; {timing['workers']} worker "
         f"processes scoring in parallel (the timings include that load). Study wall time "
-        f"{timing['wall_s']:.0f} s.",
+        f"{timing['wall_s']:.0f} s (loading or training the maps, and the scoring; not the "
+        f"figures).",
         "",
     ])
 

@@ -258,3 +258,22 @@ def test_real_postures_zones(real, test_clips):
     assert real.postures_deg.shape == (n, 45) and real.dofs.sum() == 45
     keep = real.allowed([Segment("02_03", 0, 10**6), Segment("02_01", 100, 120)])
     assert (~keep).sum() == test_clips["02_03"].n_frames + 20
+
+
+def test_foot_geom_bottoms_match_mujoco_distance_to_the_floor(test_clips, model):
+    import mujoco
+
+    from controller.qpos import to_qpos
+    from eval.scoring import foot_geoms
+
+    qpos = to_qpos(model, test_clips["02_01"])[::37]
+    centres, bottoms, _ = feet_over_frames(model, qpos)
+    geoms, _ = foot_geoms(model)
+    floor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    data = mujoco.MjData(model)
+    for t, q in enumerate(qpos):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        for k, g in enumerate(geoms):
+            distance = mujoco.mj_geomDistance(model, data, floor, int(g), 1.0, None)
+            assert bottoms[t, k] == pytest.approx(distance, abs=1e-6)
