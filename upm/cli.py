@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     "model": "upm.commands.model",
     "check": "upm.commands.check",
     "simulate": "upm.commands.simulate",
+    "eval": "upm.commands.eval",
 }
 
 

@@ -1,0 +1,252 @@
+"""Everything ``upm eval`` writes, from a :class:`~eval.study.StudyResult`.
+
+Deterministic (byte-identical for the same seed, whatever the number of workers):
+
+- ``results.json``: the protocol, every metric's definition and unit, every test clip,
+  every pair with every method's scores at every window, every real window, and all the
+  statistics;
+- ``summary.csv`` (means and intervals), ``paired.csv`` (UPM - X), ``summary.md`` (the
+  Markdown tables).
+
+Not deterministic (timings vary by nature): ``timing.json`` and ``table4.md`` (the paper's
+Table 4 on this machine). Figures (PNG): ``fig13_window_dof.png``,
+``fig14_sequence_dof.png``, ``metrics.png``, ``filmstrip.png``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from eval.metrics import METRICS
+from eval.pairs import REAL_CONTEXT, SEGMENT_FRAMES, STUDY_FPS
+from eval.realdata import FLAT_FLOOR_MAX_BW
+from eval.scoring import RESIDUAL_CONTEXT
+from eval.study import StudyResult, make_transition, pair_by_id
+from upm.fileio import atomic_open, atomic_write_text
+
+RESULTS_FORMAT = "upm-controller/eval-results"
+RESULTS_VERSION = 1
+#: The window length the figures show when the study has it (the paper's).
+FIGURE_WINDOW = 20
+
+
+def protocol(result: StudyResult) -> dict:
+    """The study's settings and rules, JSON-ready."""
+    data = result.data
+    maps = {kind: {"neurons": source.n_neurons()}
+            for kind, source in data.sources.items() if hasattr(source, "n_neurons")}
+    return {
+        **result.config.as_dict(),
+        "fps": STUDY_FPS,
+        "segment_frames": SEGMENT_FRAMES,
+        "train_subjects": result.train_subjects,
+        "maps": maps,
+        "rules": {
+            "clips": "the test split of clips.csv, resampled to 120 fps; a clip shorter "
+                     "than 200 frames gives one segment of its whole length",
+            "pairs": "segment 1 (ends at A) and segment 2 (starts at B) from two different "
+                     "test clips; the ordered clip pairs in seeded random rounds (each once "
+                     "per round), segment starts uniform",
+            "humanoid": "each pair on the model of clip 1's subject; clip 2 is put on clip "
+                        "1's skeleton, its root translation scaled by the leg lengths "
+                        "(upm.transitions.match_clip); every method gets the same root",
+            "nearest_real_exclusion": "in each source clip, the segment, the L frames the "
+                                      "window stands in for and 200 frames beyond; a real "
+                                      "window excludes itself and 200 frames on each side",
+            "real_windows": f"per window length, as many as pairs, clips in seeded random "
+                            f"rounds, starts uniform with {REAL_CONTEXT} frames on each side",
+            "seen": "both clips' subjects have a clip in the train split",
+            "flat_floor": f"both clips' own frames need a median root residual force below "
+                          f"{FLAT_FLOOR_MAX_BW} body weights (a flat floor like the model's)",
+            "residual_context_frames": RESIDUAL_CONTEXT,
+            "tracking": "not compared: with the root free the humanoid falls within about a "
+                        "second whatever it is given (no balance control)",
+        },
+    }
+
+
+def results_document(result: StudyResult, statistics: dict) -> dict:
+    """``results.json``: every pair, every method, and the statistics."""
+    return {
+        "format": RESULTS_FORMAT,
+        "format_version": RESULTS_VERSION,
+        "protocol": protocol(result),
+        "metrics": {name: spec.as_dict() for name, spec in METRICS.items()},
+        "clips": result.clips,
+        "pairs": [{**p, "scores": {str(k): v for k, v in p["scores"].items()}}
+                  for p in result.pairs],
+        "real_windows": {str(k): v for k, v in result.real.items()},
+        "statistics": statistics,
+    }
+
+
+def machine_info() -> dict:
+    """The machine the timings come from."""
+    import os
+    import platform
+
+    import scipy
+    from threadpoolctl import threadpool_info
+
+    blas = sorted({int(i.get("num_threads", 0)) for i in threadpool_info()
+                   if i.get("user_api") == "blas"})
+    return {"platform": platform.platform(terse=True), "processor": platform.machine(),
+            "cpus": os.cpu_count(), "python": platform.python_version(),
+            "numpy": np.__version__, "scipy": scipy.__version__,
+            "blas_threads": blas[0] if len(blas) == 1 else blas}
+
+
+def timing_document(result: StudyResult) -> dict:
+    """``timing.json``: ms per transition per method and window, spacetime / UPM, the
+    machine, and every pair's figure."""
+    from eval.tables import timing_summary
+
+    summary = timing_summary(result.timing_ms)
+    return {
+        "note": "compute time of each transition (upm.transitions.Transition.seconds), "
+                "measured while the worker processes score in parallel; varies by run",
+        "machine": machine_info(),
+        "workers": result.workers,
+        "wall_s": round(result.wall_s, 2),
+        **summary,
+        "per_pair_ms": {str(k): {m: [round(x, 4) for x in v] for m, v in methods.items()}
+                        for k, methods in result.timing_ms.items()},
+    }
+
+
+def figure_window(windows) -> int:
+    """The window length the figures show: 20 frames (the paper's) when studied, else the
+    first."""
+    return FIGURE_WINDOW if FIGURE_WINDOW in windows else windows[0]
+
+
+@dataclass(frozen=True)
+class Example:
+    """The pair the figures show and why.
+
+    Attributes
+    ----------
+    pair_id : int
+    dof : str
+    frames : int
+    difference_deg : float
+        |UPM - linear| of that DOF at the window's middle frame.
+    rule : str
+    """
+
+    pair_id: int
+    dof: str
+    frames: int
+    difference_deg: float
+    rule: str
+
+
+def choose_example(result: StudyResult, frames: int) -> Example:
+    """The figures' pair and DOF, by a rule (not by hand).
+
+    For every pair, the largest |UPM - linear| over the declared DOFs at the window's
+    middle frame (index L // 2); the pair is the one at the median of those (the lower
+    median: a typical pair, not the most dramatic), the DOF the one where they differ
+    most in it.
+    """
+    from upm.angles import angle_diff_deg
+    from upm.skeleton import POSTURE_DOF_NAMES
+
+    data = result.data
+    dofs = np.flatnonzero(data.real.dofs)
+    largest, which = [], []
+    for record in result.pairs:
+        pair = pair_by_id(result, record["id"])
+        middle = frames // 2
+        upm = make_transition(data, pair, "upm", frames).window_posture_deg[middle, dofs]
+        lin = make_transition(data, pair, "linear", frames).window_posture_deg[middle, dofs]
+        diff = np.abs(angle_diff_deg(upm, lin))
+        largest.append(float(diff.max()))
+        which.append(int(dofs[int(np.argmax(diff))]))
+    order = np.argsort(largest, kind="stable")
+    k = int(order[(len(order) - 1) // 2])
+    return Example(pair_id=result.pairs[k]["id"], dof=POSTURE_DOF_NAMES[which[k]],
+                   frames=frames, difference_deg=round(largest[k], 4),
+                   rule="the pair at the (lower) median of the largest |UPM - linear| "
+                        "over the declared DOFs at the window's middle frame; the DOF "
+                        "where they differ most in it")
+
+
+def write_figures(result: StudyResult, statistics: dict, out: Path) -> dict:
+    """The figures; returns ``{name: path}`` and the example's description."""
+    from eval.figures import (
+        plot_metric_chart,
+        plot_sequence_dof,
+        plot_window_dof,
+        write_filmstrip,
+    )
+
+    config = result.config
+    frames = figure_window(config.windows)
+    example = choose_example(result, frames)
+    pair = pair_by_id(result, example.pair_id)
+    transitions = {m: make_transition(result.data, pair, m, frames) for m in ("upm", "linear")}
+    label = (f"pair {pair.index}: {pair.first.clip}@{pair.first.start}:{pair.first.stop} -> "
+             f"{pair.second.clip}@{pair.second.start}:{pair.second.stop}, L = {frames}")
+    paths = {
+        "fig13": out / "fig13_window_dof.png",
+        "fig14": out / "fig14_sequence_dof.png",
+        "metrics": out / "metrics.png",
+        "filmstrip": out / "filmstrip.png",
+    }
+    plot_window_dof(paths["fig13"], transitions, dof=example.dof,
+                    title=f"{example.dof} across the window, UPM vs linear\n{label}")
+    plot_sequence_dof(paths["fig14"], transitions, example.dof,
+                      title=f"{example.dof} across the whole sequence, UPM vs linear\n{label}")
+    plot_metric_chart(paths["metrics"], statistics, list(config.methods),
+                      list(config.windows))
+    write_filmstrip(paths["filmstrip"], result.data.model(pair.first.clip), transitions,
+                    title=f"UPM (top) and linear (bottom): every 5th frame around the window "
+                          f"(orange); {label}")
+    return {"paths": {k: str(v.name) for k, v in paths.items()},
+            "example": {"pair_id": example.pair_id, "dof": example.dof,
+                        "window_frames": frames,
+                        "middle_difference_deg": example.difference_deg,
+                        "rule": example.rule}}
+
+
+def write_outputs(result: StudyResult, out_dir, figures: bool = True) -> dict:
+    """Write every output of the study into ``out_dir`` (created if missing).
+
+    Returns
+    -------
+    dict
+        ``files``: name -> path; ``statistics``; ``timing``; ``figures`` (if drawn).
+    """
+    from eval.statistics import study_statistics
+    from eval.tables import paired_csv, summary_csv, summary_markdown, table4_markdown
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    config = result.config
+    statistics = study_statistics(result.pairs, result.real, config.methods, config.windows,
+                                  config.seed)
+    document = results_document(result, statistics)
+    files = {name: out / name for name in ("results.json", "summary.csv", "paired.csv",
+                                            "summary.md", "timing.json", "table4.md")}
+    with atomic_open(files["results.json"], "w", encoding="utf-8", newline="\n") as handle:
+        json.dump(document, handle, indent=1)
+        handle.write("\n")
+    atomic_write_text(files["summary.csv"], summary_csv(statistics))
+    atomic_write_text(files["paired.csv"], paired_csv(statistics))
+    atomic_write_text(files["summary.md"], summary_markdown(document, statistics))
+    timing = timing_document(result)
+    atomic_write_text(files["timing.json"], json.dumps(timing, indent=1) + "\n")
+    atomic_write_text(files["table4.md"], table4_markdown(timing))
+    report = {"files": {k: str(v) for k, v in files.items()}, "statistics": statistics,
+              "timing": timing}
+    if figures:
+        drawn = write_figures(result, statistics, out)
+        report["figures"] = drawn
+        report["files"].update({k: str(out / v) for k, v in drawn["paths"].items()})
+        atomic_write_text(out / "figures.json", json.dumps(drawn, indent=1) + "\n")
+    return report

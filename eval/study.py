@@ -1,0 +1,406 @@
+"""The held-out study: every transition method on every pair and window length, scored on
+the humanoid, and the real windows that calibrate the scores (SPEC section 7).
+
+:func:`run_study` trains (or takes from the cache) the UPM and the SOM on the train split,
+fits the two ablations (``classnn``, ``snap``) on the same postures, draws the pairs
+(:mod:`eval.pairs`), and scores every method x window of every pair and every real window
+(:func:`eval.scoring.score_window`), in parallel over pairs with
+``concurrent.futures.ProcessPoolExecutor``. The scores do not depend on the number of
+workers: each task is a pure function of its pair, and the results are sorted by id.
+BLAS runs single-threaded in every process (the arrays are small; with several threads
+the spacetime optimisation ran up to 30x slower on a loaded machine).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from eval.metrics import METRICS, pose_distance_rms_deg
+from eval.pairs import (
+    Pair,
+    RealWindow,
+    draw_pairs,
+    draw_real_windows,
+    exclusion_zones,
+    real_exclusion_zone,
+)
+
+#: Transition methods of the study, in table order.
+STUDY_METHODS = ("upm", "som", "classnn", "snap", "linear", "slerp", "inertialize",
+                 "spacetime")
+#: The key-posture ratio (the paper's: the key posture at the window's middle).
+ALPHA = 0.5
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """What decides the study's numbers.
+
+    Attributes
+    ----------
+    data_dir : str
+        The CMU clips (``clips.csv`` gives the train/test split).
+    pairs : int
+        Transition pairs (and real windows per window length).
+    windows : tuple of int
+        Window lengths L, frames at 120 fps.
+    seed : int
+    methods : tuple of str
+    """
+
+    data_dir: str
+    pairs: int = 40
+    windows: tuple[int, ...] = (20,)
+    seed: int = 0
+    methods: tuple[str, ...] = STUDY_METHODS
+
+    def as_dict(self) -> dict:
+        return {"pairs": self.pairs, "windows": list(self.windows), "seed": self.seed,
+                "methods": list(self.methods), "alpha": ALPHA}
+
+
+@dataclass
+class StudyData:
+    """Everything a worker needs, built once per process (:func:`prepare`).
+
+    Attributes
+    ----------
+    config : StudyConfig
+    catalog : upm.catalog.Catalog
+    motions : dict of str to upm.Motion
+        The test clips at 120 fps.
+    lengths : dict of str to int
+        Their frame counts.
+    real : eval.realdata.RealPostures
+    sources : dict of str to KeyPostureSource
+        By key kind: ``upm``, ``som``, ``classnn``, ``snap``.
+    train_subjects : frozenset of str
+        Subjects with at least one clip in the train split.
+    """
+
+    config: StudyConfig
+    catalog: object
+    motions: dict
+    lengths: dict[str, int]
+    real: object
+    sources: dict
+    train_subjects: frozenset
+    models: dict = field(default_factory=dict)
+
+    def model(self, clip: str):
+        """The humanoid of a clip's subject (loaded once)."""
+        from humanoid_xml import catalog_model_path, load_model
+
+        subject = self.catalog.info(clip).subject
+        if subject not in self.models:
+            self.models[subject] = load_model(catalog_model_path(self.catalog, subject))
+        return self.models[subject]
+
+    def subject(self, clip: str) -> str:
+        return self.catalog.info(clip).subject
+
+    def segment(self, segment):
+        return self.motions[segment.clip].frames(segment.start, segment.stop)
+
+
+def key_sources(catalog, methods, progress: bool = False) -> dict:
+    """The key-posture sources the methods need: the UPM and the SOM trained on the train
+    split (cached: :func:`upm.map_cache.trained_map`), and the ablations fitted on every
+    frame of it."""
+    from upm.map_cache import trained_map
+    from upm.transitions import METHODS, ClassNearest, NearestPosture, training_postures
+
+    kinds = {METHODS[m].key_kind for m in methods} - {None}
+    sources = {}
+    for kind in ("upm", "som"):
+        if kind in kinds:
+            sources[kind] = trained_map(catalog, kind, progress=progress)
+    if kinds & {"classnn", "snap"}:
+        postures = training_postures(catalog, "train")
+        if "classnn" in kinds:
+            sources["classnn"] = ClassNearest(postures)
+        if "snap" in kinds:
+            sources["snap"] = NearestPosture(postures)
+    return sources
+
+
+def prepare(config: StudyConfig, progress: bool = False) -> StudyData:
+    """Load the clips and the key-posture sources (training the maps if not cached)."""
+    from eval.realdata import RealPostures, load_test_clips
+    from upm.catalog import Catalog
+
+    catalog = Catalog(config.data_dir)
+    motions = load_test_clips(catalog)
+    data = StudyData(
+        config=config, catalog=catalog, motions=motions,
+        lengths={name: m.n_frames for name, m in motions.items()},
+        real=RealPostures.of(motions),
+        sources=key_sources(catalog, config.methods, progress),
+        train_subjects=frozenset(catalog.info(n).subject for n in catalog.names("train")),
+    )
+    _warm_up(data)
+    return data
+
+
+def _warm_up(data: StudyData) -> None:
+    """One short transition by every method, so that no method's first timed call pays
+    for lazily built search structures or first-use imports."""
+    from eval.pairs import Segment
+
+    first, second = list(data.lengths)[:2]
+    pair = Pair(index=-1, first=Segment(first, 0, 10), second=Segment(second, 0, 10))
+    for method in data.config.methods:
+        make_transition(data, pair, method, 4)
+
+
+def make_transition(data: StudyData, pair: Pair, method: str, frames: int):
+    """The transition of one pair by one method (``upm.transitions.transition``)."""
+    from upm.transitions import METHODS, transition
+
+    source = data.sources.get(METHODS[method].key_kind)
+    return transition(method, data.segment(pair.first), data.segment(pair.second), frames,
+                      ALPHA, source)
+
+
+def score_pair(data: StudyData, pair: Pair) -> dict:
+    """Every method x window of one pair.
+
+    Returns
+    -------
+    dict
+        ``index``; ``scores``: ``{L: {method: {metric: value}}}``; ``ms``: ``{L: {method:
+        milliseconds of the transition itself}}``; ``end_self_collision``: whether A and
+        B (clip 2's first posture on clip 1's body) are in self-collision.
+    """
+    from eval.scoring import end_self_collision, score_window
+
+    scores: dict = {}
+    ms: dict = {}
+    ends = None
+    for frames in data.config.windows:
+        zones = exclusion_zones(pair, frames, data.lengths)
+        scores[frames], ms[frames] = {}, {}
+        for method in data.config.methods:
+            t = make_transition(data, pair, method, frames)
+            model = data.model(pair.first.clip)
+            scores[frames][method] = score_window(model, t.motion, t.window, data.real, zones)
+            ms[frames][method] = 1000.0 * t.seconds
+            if ends is None:
+                ends = end_self_collision(model, t.motion, t.window)
+    return {"index": pair.index, "scores": scores, "ms": ms, "end_self_collision": ends}
+
+
+def score_real(data: StudyData, window: RealWindow) -> dict:
+    """One real window of a test clip, scored exactly as a transition's window."""
+    from eval.scoring import score_window
+
+    motion = data.motions[window.clip]
+    zones = real_exclusion_zone(window, data.lengths)
+    return {"index": window.index, "frames": window.frames,
+            "scores": score_window(data.model(window.clip), motion,
+                                   slice(window.start, window.stop), data.real, zones)}
+
+
+# --- worker processes ---------------------------------------------------------------------
+
+_DATA: StudyData | None = None
+
+
+def _single_threaded_blas() -> None:
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]), user_api="blas")
+
+
+def _init_worker(config: StudyConfig) -> None:
+    global _DATA
+    _single_threaded_blas()
+    if _DATA is None or _DATA.config != config:
+        _DATA = prepare(config)
+
+
+def _task(kind: str, item):
+    return kind, (score_pair(_DATA, item) if kind == "pair" else score_real(_DATA, item))
+
+
+def _pool_context():
+    import multiprocessing
+
+    # fork shares the loaded maps with the workers; elsewhere they load them from the cache.
+    methods = multiprocessing.get_all_start_methods()
+    return multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+
+
+def default_workers() -> int:
+    """The cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:
+        return max(1, os.cpu_count() or 1)
+
+
+# --- the study ----------------------------------------------------------------------------
+
+
+@dataclass
+class StudyResult:
+    """The study's scores, before statistics.
+
+    Attributes
+    ----------
+    config : StudyConfig
+    pairs : list of dict
+        Per pair (sorted by id): ``id``, ``first``/``second`` segments, ``subjects``,
+        ``ab_distance_deg`` (A to B, RMS over the declared DOFs), ``seen`` (both
+        subjects have clips in the train split), ``end_self_collision`` ([A, B] in
+        self-collision on clip 1's body), ``flat_floor`` (both clips flat-floor),
+        ``scores`` ``{L: {method: {metric: value}}}``.
+    real : dict of int to list of dict
+        Per window length, the real windows: ``id``, ``clip``, ``start``, ``stop``,
+        ``flat_floor``, ``scores``.
+    clips : dict of str to dict
+        Per test clip: ``subject``, ``frames`` (120 fps), ``seen``,
+        ``floor_residual_median_bw``, ``flat_floor``.
+    train_subjects : list of str
+    timing_ms : dict
+        ``{L: {method: [ms per pair, by pair id]}}`` (not deterministic: kept apart).
+    wall_s : float
+    workers : int
+    data : StudyData
+        The main process's data (for the figures).
+    """
+
+    config: StudyConfig
+    pairs: list
+    real: dict
+    clips: dict
+    train_subjects: list
+    timing_ms: dict
+    wall_s: float
+    workers: int
+    data: StudyData
+
+
+def run_study(config: StudyConfig, workers: int | None = None,
+              show_progress: bool = True) -> StudyResult:
+    """Run the study.
+
+    Parameters
+    ----------
+    config : StudyConfig
+    workers : int, optional
+        Processes (default: the usable cores, at most one per task); 1 runs in this
+        process.
+    show_progress : bool
+        Progress bars on stderr (terminals only).
+
+    Returns
+    -------
+    StudyResult
+    """
+    from eval.realdata import FLAT_FLOOR_MAX_BW, floor_residuals
+    from upm.progress import progress
+    from upm.transitions import METHODS
+
+    unknown = [m for m in config.methods if m not in METHODS]
+    if unknown:
+        from upm.errors import UsageError
+
+        raise UsageError(f"no transition method {unknown[0]!r} (methods: {', '.join(METHODS)})")
+    global _DATA
+    start = time.perf_counter()
+    _single_threaded_blas()
+    data = prepare(config, progress=show_progress)
+    _DATA = data
+    pairs = draw_pairs(data.lengths, config.pairs, config.seed)
+    real = {frames: draw_real_windows(data.lengths, config.pairs, frames, config.seed)
+            for frames in config.windows}
+    tasks = [("pair", p) for p in pairs] + [("real", w) for ws in real.values() for w in ws]
+    workers = min(workers or default_workers(), len(tasks))
+
+    bar = progress(total=len(tasks), desc="scoring", unit="task",
+                   disable=None if show_progress else True)
+    done = []
+    try:
+        if workers <= 1:
+            for kind, item in tasks:
+                done.append(_task(kind, item))
+                bar.update()
+        else:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
+                                     initializer=_init_worker, initargs=(config,)) as pool:
+                futures = [pool.submit(_task, kind, item) for kind, item in tasks]
+                for future in as_completed(futures):
+                    done.append(future.result())
+                    bar.update()
+    finally:
+        bar.close()
+
+    floor = floor_residuals(data.catalog, data.motions)
+    clips = {name: {"subject": data.subject(name), "frames": data.lengths[name],
+                    "seen": data.subject(name) in data.train_subjects,
+                    "floor_residual_median_bw": floor[name],
+                    "flat_floor": floor[name] < FLAT_FLOOR_MAX_BW}
+             for name in data.motions}
+    by_pair = {r["index"]: r for kind, r in done if kind == "pair"}
+    pair_records = [_pair_record(data, p, by_pair[p.index], clips) for p in pairs]
+    timing = {frames: {m: [by_pair[p.index]["ms"][frames][m] for p in pairs]
+                       for m in config.methods} for frames in config.windows}
+    real_scores = {(r["frames"], r["index"]): r["scores"] for kind, r in done if kind == "real"}
+    real_records = {frames: [{"id": w.index, "clip": w.clip, "start": w.start, "stop": w.stop,
+                              "flat_floor": clips[w.clip]["flat_floor"],
+                              "scores": _ordered(real_scores[(frames, w.index)])}
+                             for w in ws]
+                    for frames, ws in real.items()}
+    return StudyResult(config=config, pairs=pair_records, real=real_records, clips=clips,
+                       train_subjects=sorted(data.train_subjects), timing_ms=timing,
+                       wall_s=time.perf_counter() - start, workers=workers, data=data)
+
+
+def _ordered(scores: dict) -> dict:
+    return {name: scores[name] for name in METRICS}
+
+
+def _pair_record(data: StudyData, pair: Pair, outcome: dict, clips: dict) -> dict:
+    a = data.motions[pair.first.clip].posture_deg[pair.first.stop - 1]
+    b = data.motions[pair.second.clip].posture_deg[pair.second.start]
+    dofs = data.real.dofs
+    subjects = [data.subject(pair.first.clip), data.subject(pair.second.clip)]
+    return {
+        "id": pair.index,
+        "first": pair.first.as_dict(),
+        "second": pair.second.as_dict(),
+        "subjects": subjects,
+        "ab_distance_deg": round(float(pose_distance_rms_deg(a[dofs], b[dofs])), 6),
+        "seen": all(s in data.train_subjects for s in subjects),
+        "end_self_collision": outcome["end_self_collision"],
+        "flat_floor": clips[pair.first.clip]["flat_floor"] and clips[pair.second.clip][
+            "flat_floor"],
+        "scores": {frames: {m: _ordered(outcome["scores"][frames][m])
+                            for m in data.config.methods}
+                   for frames in data.config.windows},
+    }
+
+
+def pair_by_id(result: StudyResult, index: int) -> Pair:
+    """The :class:`~eval.pairs.Pair` of a record id (for re-making its transitions)."""
+    from eval.pairs import Segment
+
+    record = result.pairs[index]
+    return Pair(index=record["id"], first=Segment(**record["first"]),
+                second=Segment(**record["second"]))
+
+
+def metric_matrix(records: list[dict], frames: int, method: str | None,
+                  metric: str) -> np.ndarray:
+    """One metric over records (pairs, or real windows with ``method=None``), (N,)."""
+    if method is None:
+        return np.array([r["scores"][metric] for r in records], dtype=float)
+    return np.array([r["scores"][frames][method][metric] for r in records], dtype=float)

@@ -1,0 +1,387 @@
+"""Tables of the study: ``summary.csv`` and ``paired.csv`` (every interval and comparison,
+one per row), ``summary.md`` (the Markdown tables) and ``table4.md`` (the paper's
+Table 4: milliseconds per transition and the spacetime / UPM ratio).
+
+Everything but Table 4 is a pure function of the statistics, so it is byte-identical for
+the same seed; Table 4 comes from the run's timings and varies from run to run.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import numpy as np
+
+from eval.metrics import HEADLINE, METRICS
+from eval.statistics import GROUPS
+
+#: How each metric is shown in Markdown: (scale, decimals, header).
+DISPLAY: dict[str, tuple[float, int, str]] = {
+    "valid_pct": (1.0, 1, "valid frames %"),
+    "raw_valid_pct": (1.0, 1, "valid frames (raw limits) %"),
+    "valid_added_pct": (1.0, 1, "valid frames (added only) %"),
+    "added_limit_mean_deg": (1.0, 2, "added limit deg"),
+    "added_limit_max_deg": (1.0, 2, "added limit max deg"),
+    "self_collision_pct": (1.0, 1, "self-collision frames %"),
+    "self_collision_added_pct": (1.0, 1, "self-collision added %"),
+    "self_depth_max_mm": (1.0, 1, "self-contact max mm"),
+    "floor_penetration_pct": (1.0, 1, "floor penetration %"),
+    "nearest_real_mean_deg": (1.0, 2, "nearest real deg"),
+    "nearest_real_max_deg": (1.0, 2, "nearest real max deg"),
+    "jerk_rms_deg_s3": (1e-3, 0, "jerk 10^3 deg/s^3"),
+    "foot_skate_mps": (1.0, 3, "foot skate m/s"),
+    "residual_force_mean_bw": (1.0, 3, "residual force bw"),
+    "residual_force_peak_bw": (1.0, 3, "residual peak bw"),
+}
+#: The baselines the headline table may pick its "best other baseline" from (the
+#: ablations classnn and snap are not baselines: they are UPM without its map).
+BASELINES = ("som", "slerp", "inertialize", "spacetime")
+#: Plain names of the groups.
+GROUP_NAMES = {
+    "all": "all pairs", "ab_near": "A-B near (1st tercile)", "ab_middle": "A-B middle",
+    "ab_far": "A-B far (3rd tercile)", "seen": "subjects seen in training",
+    "unseen": "a subject not seen", "flat_floor": "flat floor", "uneven_floor": "not flat",
+}
+
+
+def best_baseline(statistics: dict, frames: int, methods) -> str | None:
+    """The baseline with the highest mean valid-frame share at window ``frames`` (ties:
+    the lower mean nearest-real distance), among :data:`BASELINES` that were run."""
+    rows = statistics["summary"][str(frames)]["all"]
+    candidates = [m for m in BASELINES if m in methods]
+    if not candidates:
+        return None
+    return min(candidates, key=lambda m: (-rows[m]["valid_pct"]["mean"],
+                                          rows[m]["nearest_real_mean_deg"]["mean"]))
+
+
+def _num(metric: str, value, signed: bool = False) -> str:
+    if value is None:
+        return "-"
+    scale, decimals, _ = DISPLAY[metric]
+    text = f"{value * scale:{'+' if signed else ''}.{decimals}f}"
+    return f"{0.0:.{decimals}f}" if float(text) == 0.0 else text
+
+
+def cell(metric: str, interval: dict, signed: bool = False) -> str:
+    """``mean [lo, hi]`` in the metric's display units."""
+    if interval["n"] == 0:
+        return "-"
+    return (f"{_num(metric, interval['mean'], signed)} "
+            f"[{_num(metric, interval['lo'], signed)}, {_num(metric, interval['hi'], signed)}]")
+
+
+def summary_csv(statistics: dict) -> str:
+    """One row per window x group x method x metric: mean and interval."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["window_frames", "group", "method", "metric", "unit", "better", "mean",
+                     "ci_low", "ci_high", "n"])
+    for frames, groups in statistics["summary"].items():
+        for group, rows in groups.items():
+            for method, metrics in rows.items():
+                for metric, iv in metrics.items():
+                    spec = METRICS[metric]
+                    writer.writerow([frames, group, method, metric, spec.unit, spec.better,
+                                     _csv(iv["mean"]), _csv(iv["lo"]), _csv(iv["hi"]),
+                                     iv["n"]])
+    return out.getvalue()
+
+
+def paired_csv(statistics: dict) -> str:
+    """One row per window x compared method x group x metric: UPM - X."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["window_frames", "upm_minus", "group", "metric", "unit", "better",
+                     "mean_diff", "ci_low", "ci_high", "n", "upm_wins", "ties", "upm_losses"])
+    for frames, others in statistics["paired"].items():
+        for other, groups in others.items():
+            for group, metrics in groups.items():
+                for metric, c in metrics.items():
+                    spec = METRICS[metric]
+                    writer.writerow([frames, other, group, metric, spec.unit, spec.better,
+                                     _csv(c["mean_diff"]), _csv(c["lo"]), _csv(c["hi"]),
+                                     c["n"], c["wins"], c["ties"], c["losses"]])
+    return out.getvalue()
+
+
+def _csv(value) -> str:
+    return "" if value is None else repr(float(value))
+
+
+def _table(header: list[str], rows: list[list[str]], align: list[str] | None = None) -> str:
+    align = align or ["l"] + ["r"] * (len(header) - 1)
+    rule = ["---:" if a == "r" else "---" for a in align]
+    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join(rule) + " |"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def method_table(statistics: dict, frames: int, methods, metrics, group: str = "all",
+                 real_label: str = "real windows (calibration)") -> str:
+    """Methods (and the real windows) x metrics: ``mean [95 % interval]``."""
+    rows_in = statistics["summary"][str(frames)][group]
+    header = ["method"] + [DISPLAY[m][2] for m in metrics]
+    rows = [[name] + [cell(m, rows_in[name][m]) for m in metrics] for name in methods]
+    rows.append([real_label] + [cell(m, rows_in["real"][m]) for m in metrics])
+    return _table(header, rows)
+
+
+def paired_table(statistics: dict, frames: int, other: str, group: str = "all") -> str:
+    """UPM - X per metric: mean difference [interval], wins / ties / losses."""
+    comps = statistics["paired"][str(frames)][other][group]
+    rows = []
+    for metric, c in comps.items():
+        better = "higher" if METRICS[metric].better == "higher" else "lower"
+        rows.append([DISPLAY[metric][2], better,
+                     cell(metric, {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"],
+                                   "n": c["n"]}, signed=True),
+                     f"{c['wins']} / {c['ties']} / {c['losses']}", verdict(c, metric)])
+    return _table(["metric", "better", f"UPM - {other}", "UPM wins / ties / loses", "verdict"],
+                  rows, ["l", "l", "r", "r", "l"])
+
+
+def verdict(comparison: dict, metric: str) -> str:
+    """``UPM better`` / ``UPM worse`` when the interval of the mean difference excludes 0
+    on that side, ``no difference shown`` otherwise."""
+    lo, hi = comparison["lo"], comparison["hi"]
+    if comparison["n"] == 0 or lo is None:
+        return "-"
+    sign = 1.0 if METRICS[metric].better == "higher" else -1.0
+    if lo == hi == 0:
+        return "identical"
+    if sign * lo > 0 and sign * hi > 0:
+        return "UPM better"
+    if sign * lo < 0 and sign * hi < 0:
+        return "UPM worse"
+    return "no difference shown"
+
+
+def group_table(statistics: dict, frames: int, other: str, metrics) -> str:
+    """UPM - X on some metrics in every group: ``diff [interval] (W/T/L)``."""
+    paired = statistics["paired"][str(frames)][other]
+    counts = statistics["groups"]["pairs"]
+    rows = []
+    for group in GROUPS:
+        row = [f"{GROUP_NAMES[group]} (n={counts[group]})"]
+        for metric in metrics:
+            c = paired[group][metric]
+            if c["n"] == 0:
+                row.append("-")
+                continue
+            iv = {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"], "n": c["n"]}
+            row.append(f"{cell(metric, iv, signed=True)} ({c['wins']}/{c['ties']}/{c['losses']})")
+        rows.append(row)
+    return _table(["pairs"] + [DISPLAY[m][2] for m in metrics], rows)
+
+
+def versus_table(statistics: dict, frames: int, others, metrics) -> str:
+    """UPM - X for several X on some metrics: ``diff [interval] (W/T/L)``."""
+    paired = statistics["paired"][str(frames)]
+    rows = []
+    for other in others:
+        row = [f"UPM - {other}"]
+        for metric in metrics:
+            c = paired[other]["all"][metric]
+            iv = {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"], "n": c["n"]}
+            row.append(f"{cell(metric, iv, signed=True)} ({c['wins']}/{c['ties']}/{c['losses']})")
+        rows.append(row)
+    return _table(["comparison"] + [DISPLAY[m][2] for m in metrics], rows)
+
+
+def calibration_table(statistics: dict, frames: int, clips: dict) -> str:
+    """Real windows per test clip: the mean of each headline metric."""
+    by_clip = statistics["calibration_by_clip"][str(frames)]
+    rows = []
+    for clip, values in by_clip.items():
+        info = clips.get(clip, {})
+        rows.append([clip, str(values["n"]), "yes" if info.get("flat_floor") else "no",
+                     "yes" if info.get("seen") else "no"]
+                    + [_num(m, values[m]) for m in HEADLINE])
+    return _table(["clip", "windows", "flat floor", "subject seen"]
+                  + [DISPLAY[m][2] for m in HEADLINE], rows)
+
+
+def summary_markdown(result_meta: dict, statistics: dict) -> str:
+    """The study's tables as Markdown.
+
+    Parameters
+    ----------
+    result_meta : dict
+        ``protocol`` (from results.json) and ``clips``.
+    statistics : dict
+        :func:`eval.statistics.study_statistics`.
+    """
+    protocol = result_meta["protocol"]
+    clips = result_meta["clips"]
+    methods = protocol["methods"]
+    others = [m for m in methods if m != "upm"]
+    secondary = [m for m in METRICS if m not in HEADLINE]
+    parts = [
+        "# UPM transition study: held-out results",
+        "",
+        f"{protocol['pairs']} transition pairs between {protocol['segment_frames']}-frame "
+        f"segments of two different test clips ({', '.join(clips)}), at "
+        f"{protocol['fps']:g} fps, windows of {', '.join(map(str, protocol['windows']))} "
+        f"frames, seed {protocol['seed']}; maps trained on the train split. Every cell is "
+        f"the mean over pairs with its 95 % percentile bootstrap interval "
+        f"({statistics['bootstrap']['resamples']} resamples). The calibration row scores "
+        f"real windows of the test clips exactly as a transition's window. Units and "
+        f"definitions: results.json (`metrics`).",
+    ]
+    ends = statistics["groups"]["end_self_collision"]
+    parts += [
+        "",
+        "Reading these tables:",
+        "",
+        "- Every method gets the same root (the velocity blend of upm.transitions.root): the "
+        "differences in residual force and foot skating between methods come from the joint "
+        "angles alone; their level is set mostly by that shared root and by the data (see "
+        "the calibration rows).",
+        "- Valid frames: an excess beyond the ASF limits counts only where it is beyond what "
+        "the two end postures already have (real CMU frames often break their limits); "
+        "self-collision and floor penetration count as they are. Clip 2's first posture B on "
+        f"clip 1's body is itself in self-collision in {ends['B']} of {protocol['pairs']} "
+        f"pairs (A in {ends['A']}): 'valid (added only)' also counts only self-collisions "
+        "between body pairs in contact at neither end.",
+        "- Linear and slerp stay between A and B on every DOF, so they add a limit excess "
+        "only where the short way round crosses a DOF's excluded arc; a window that moves "
+        "through a key posture, as real motion does, can add more.",
+        "- Jerk: third differences at 120 fps amplify the capture noise, so real windows "
+        "score above any smooth window; the metric ranks methods against each other (a C0 "
+        "join shows as a velocity jump).",
+        "- Residual force: read it on the flat-floor pairs; on the other clips the real data "
+        "alone needs about one body weight (the model's floor is flat).",
+        "- Foot skating uses the height threshold only: a swing foot skimming the floor "
+        "below 5 cm counts too, so real walks score well above zero; compare methods with "
+        "each other and with the calibration row.",
+        "- Tracking with a free root is not compared: the humanoid falls within about a "
+        "second whatever it is given (no balance control).",
+    ]
+    for frames in protocol["windows"]:
+        best = best_baseline(statistics, frames, methods)
+        parts += [
+            "",
+            f"## Window of {frames} frames ({frames / protocol['fps'] * 1000:.0f} ms)",
+            "",
+            "### Every method, headline metrics",
+            "",
+            method_table(statistics, frames, methods, HEADLINE),
+            "",
+            "### Every method, the other metrics",
+            "",
+            method_table(statistics, frames, methods, secondary),
+            "",
+            "### Residual force on flat-floor pairs only",
+            "",
+            f"Pairs whose two clips are flat-floor (n = "
+            f"{statistics['groups']['pairs']['flat_floor']}); real windows of flat-floor clips.",
+            "",
+            method_table(statistics, frames, methods,
+                         ["residual_force_mean_bw", "residual_force_peak_bw"],
+                         group="flat_floor"),
+            "",
+            "### UPM - linear, paired over pairs",
+            "",
+            "A tie is an equal value (e.g. both windows fully valid). Verdict: the 95 % "
+            "interval of the mean difference excludes 0.",
+            "",
+            paired_table(statistics, frames, "linear"),
+            "",
+            "### UPM - linear by group (difference [interval] (UPM wins/ties/losses))",
+            "",
+            f"A-B distance terciles cut at {statistics['groups']['ab_tercile_edges_deg']} "
+            "deg RMS.",
+            "",
+            group_table(statistics, frames, "linear", HEADLINE),
+            "",
+            "### UPM - every other method (all pairs)",
+            "",
+            versus_table(statistics, frames, others, HEADLINE),
+        ]
+        if best is not None:
+            parts += ["", f"Best other baseline at this window (highest valid share among "
+                          f"{', '.join(BASELINES)}): **{best}**."]
+        parts += [
+            "",
+            "### Calibration: real windows per test clip (means)",
+            "",
+            calibration_table(statistics, frames, clips),
+        ]
+    return "\n".join(parts) + "\n"
+
+
+def timing_summary(timing_ms: dict) -> dict:
+    """Per window and method: median, mean and 90th percentile of the milliseconds per
+    transition, and spacetime / UPM (ratio of medians)."""
+    out = {"ms": {}, "spacetime_over_upm": {}}
+    for frames, methods in timing_ms.items():
+        key = str(frames)
+        out["ms"][key] = {m: {"median": round(float(np.median(v)), 4),
+                              "mean": round(float(np.mean(v)), 4),
+                              "p90": round(float(np.percentile(v, 90)), 4), "n": len(v)}
+                          for m, v in methods.items()}
+        if "spacetime" in methods and "upm" in methods:
+            out["spacetime_over_upm"][key] = round(
+                float(np.median(methods["spacetime"]) / np.median(methods["upm"])), 2)
+    return out
+
+
+def table4_markdown(timing: dict) -> str:
+    """The paper's Table 4 on this machine: ms per transition per method and window."""
+    windows = list(timing["ms"])
+    methods = list(next(iter(timing["ms"].values())))
+    header = ["method"] + [f"ms, L = {w} (median [p90])" for w in windows]
+    rows = [[m] + [f"{timing['ms'][w][m]['median']:.2f} [{timing['ms'][w][m]['p90']:.2f}]"
+                   for w in windows] for m in methods]
+    if timing["spacetime_over_upm"]:
+        rows.append(["**spacetime / UPM**"] + [f"**{timing['spacetime_over_upm'][w]:.1f}x**"
+                                               for w in windows])
+    machine = timing["machine"]
+    return "\n".join([
+        "# Table 4: time per transition",
+        "",
+        "Milliseconds to compute one transition (window postures, root blend, re-anchoring "
+        "clip 2; not the scoring), median over the pairs of this run with the 90th "
+        "percentile. The paper's Table 4: spacetime 72 s vs UPM 1-2 s (36-72x).",
+        "",
+        _table(header, rows),
+        "",
+        f"Machine: {machine['platform']}, {machine['cpus']} CPUs ({machine['processor']}), "
+        f"Python {machine['python']}, numpy {machine['numpy']}, scipy {machine['scipy']}; "
+        f"BLAS threads per process: {machine['blas_threads']}; {timing['workers']} worker "
+        f"processes scoring in parallel (the timings include that load). Study wall time "
+        f"{timing['wall_s']:.0f} s (loading or training the maps, and the scoring; not the "
+        f"figures).",
+        "",
+    ])
+
+
+def headline_rows(statistics: dict, timing: dict, frames: int, methods) -> list[dict]:
+    """The headline for one window: UPM, linear, the best other baseline and the real
+    windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
+    rows = statistics["summary"][str(frames)]["all"]
+    best = best_baseline(statistics, frames, methods)
+    names = [m for m in ("upm", "linear") if m in methods] + ([best] if best else [])
+    out = []
+    for name in names + ["real"]:
+        entry = {"method": name if name != "real" else "real windows"}
+        for metric in HEADLINE:
+            entry[metric] = rows[name][metric]
+        ms = timing["ms"][str(frames)].get(name) if name != "real" else None
+        entry["ms_median"] = ms["median"] if ms else None
+        out.append(entry)
+    return out
+
+
+def headline_text(statistics: dict, timing: dict, frames: int, methods) -> str:
+    """The headline as a plain-text table for the terminal."""
+    rows = headline_rows(statistics, timing, frames, methods)
+    header = ["method"] + [DISPLAY[m][2] for m in HEADLINE] + ["ms"]
+    cells = [[r["method"]] + [cell(m, r[m]) for m in HEADLINE]
+             + ["-" if r["ms_median"] is None else f"{r['ms_median']:.2f}"] for r in rows]
+    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
+    return "\n".join(lines)

@@ -1,0 +1,117 @@
+"""``upm eval`` end to end on a small study (3 pairs, 10-frame windows, every method): the
+files, every method x metric for every pair, the calibration row, the figures; the same
+seed gives byte-identical results with 2 worker processes and with none; bad arguments
+are one-line errors."""
+
+import json
+
+import pytest
+
+from eval.metrics import HEADLINE, METRICS
+from eval.study import STUDY_METHODS
+from upm.cli import main
+
+DETERMINISTIC = ("results.json", "summary.csv", "paired.csv", "summary.md")
+
+
+def _run(data_dir, out, *extra):
+    return main(["eval", "--data", str(data_dir), "--pairs", "3", "--windows", "10",
+                 "--seed", "7", "--out", str(out), *extra])
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory, data_dir):
+    out = tmp_path_factory.mktemp("eval")
+    assert _run(data_dir, out / "two", "--workers", "2") == 0
+    assert _run(data_dir, out / "one", "--workers", "1", "--no-figures") == 0
+    return out
+
+
+def test_writes_every_output(study):
+    names = {p.name for p in (study / "two").iterdir()}
+    assert set(DETERMINISTIC) | {"timing.json", "table4.md", "figures.json"} <= names
+    for png in ("fig13_window_dof.png", "fig14_sequence_dof.png", "metrics.png",
+                "filmstrip.png"):
+        data = (study / "two" / png).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+    assert not [n for n in names if n.startswith(".tmp-")]
+    assert not list((study / "one").glob("*.png"))
+
+
+def test_same_seed_same_bytes_whatever_the_workers(study):
+    for name in DETERMINISTIC:
+        assert (study / "one" / name).read_bytes() == (study / "two" / name).read_bytes(), name
+
+
+def test_results_hold_every_pair_method_and_metric(study):
+    results = json.loads((study / "two" / "results.json").read_text())
+    assert results["format"] == "upm-controller/eval-results"
+    assert set(results["metrics"]) == set(METRICS)
+    assert all(results["metrics"][m]["unit"] for m in METRICS)
+    assert [p["id"] for p in results["pairs"]] == [0, 1, 2]
+    for pair in results["pairs"]:
+        assert pair["first"]["clip"] != pair["second"]["clip"]
+        assert pair["first"]["stop"] - pair["first"]["start"] in (173, 200)
+        scores = pair["scores"]["10"]
+        assert list(scores) == list(STUDY_METHODS)
+        for method in STUDY_METHODS:
+            assert list(scores[method]) == list(METRICS)
+    protocol = results["protocol"]
+    assert protocol["pairs"] == 3 and protocol["windows"] == [10] and protocol["seed"] == 7
+    assert set(protocol["train_subjects"]) >= {"02", "05", "83", "141"}
+    assert not {"03", "16"} & set(protocol["train_subjects"])
+    assert {c: results["clips"][c]["seen"] for c in ("16_15", "05_11")} == {
+        "16_15": False, "05_11": True}
+
+
+def test_calibration_row_exists(study):
+    results = json.loads((study / "two" / "results.json").read_text())
+    real = results["real_windows"]["10"]
+    assert len(real) == 3
+    assert all(list(r["scores"]) == list(METRICS) for r in real)
+    summary = results["statistics"]["summary"]["10"]["all"]
+    assert set(summary) == set(STUDY_METHODS) | {"real"}
+    assert summary["real"]["nearest_real_mean_deg"]["n"] == 3
+    table = (study / "two" / "summary.md").read_text()
+    assert "real windows (calibration)" in table and "UPM - linear" in table
+
+
+def test_paired_comparisons_and_groups(study):
+    results = json.loads((study / "two" / "results.json").read_text())
+    paired = results["statistics"]["paired"]["10"]
+    assert set(paired) == set(STUDY_METHODS) - {"upm"}
+    for metric in HEADLINE:
+        c = paired["linear"]["all"][metric]
+        assert c["wins"] + c["ties"] + c["losses"] == 3
+    groups = results["statistics"]["groups"]["pairs"]
+    assert groups["all"] == 3
+    assert groups["seen"] + groups["unseen"] == 3
+
+
+def test_timing_and_table4(study):
+    timing = json.loads((study / "two" / "timing.json").read_text())
+    assert set(timing["ms"]["10"]) == set(STUDY_METHODS)
+    assert all(len(v) == 3 for v in timing["per_pair_ms"]["10"].values())
+    assert timing["spacetime_over_upm"]["10"] > 1.0
+    assert timing["machine"]["blas_threads"] == 1
+    assert "spacetime / UPM" in (study / "two" / "table4.md").read_text()
+
+
+def test_figures_name_their_example(study):
+    figures = json.loads((study / "two" / "figures.json").read_text())
+    assert figures["example"]["pair_id"] in (0, 1, 2)
+    assert "median" in figures["example"]["rule"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--windows", "10,x"], "--windows"),
+    (["--windows", "1"], "at least 2 frames"),
+    (["--pairs", "1"], "--pairs"),
+    (["--methods", "upm", "cubic"], "no transition method 'cubic'"),
+    (["--methods", "upm", "som"], "figures compare upm with linear"),
+])
+def test_bad_arguments_are_one_line_errors(args, message, tmp_path, data_dir, capsys):
+    code = main(["eval", "--data", str(data_dir), "--out", str(tmp_path / "o"), *args])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0]
+    assert not (tmp_path / "o").exists()

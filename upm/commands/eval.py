@@ -1,0 +1,157 @@
+"""The held-out study: are UPM transitions more physically valid and more natural than
+linear blends (and the other methods), on real data?
+
+The UPM and the classic SOM are trained on the train split of clips.csv (once: the maps
+are cached outside the repository). Seeded transition pairs join 200-frame segments of
+two different test clips (all resampled to 120 fps); every method builds the window
+(upm, som, the two ablations classnn and snap, linear, slerp, inertialize, spacetime),
+and each window is scored on the MuJoCo humanoid of clip 1's subject:
+
+  - kinematic validity: valid frames (no joint-limit excess beyond what the two end
+    postures already have, no self-collision > 1 mm, no floor penetration > 1 cm), the
+    added limit excess, self-collision, floor penetration;
+  - distance to the nearest real posture of the test clips outside the pair's own
+    neighbourhood (deg RMS over the 45 declared DOFs);
+  - joint jerk (across the joins too), foot skating (horizontal foot speed below 5 cm),
+    the root residual force (inverse dynamics, body weights);
+  - the time per transition.
+
+Real windows of the test clips are scored the same way: the calibration row. Every
+method gets the same root (the velocity blend), so residual force and foot skating
+compare the joint angles; read the residual on the flat-floor pairs (the uneven-terrain
+walk, the step-up and the 60 fps jumps need about one body weight in the real data
+alone). Free-root tracking is not compared: the humanoid falls within about a second
+whatever it is given (it has no balance control).
+
+The output directory gets results.json (every pair, every method), summary.csv, paired.csv,
+summary.md (means with 95 % bootstrap intervals, UPM - X paired, by A-B distance
+tercile, by seen/unseen subject, flat floor), table4.md + timing.json (ms per transition,
+spacetime / UPM: these vary by run, the rest is identical for the same seed) and the
+figures (fig13_window_dof.png, fig14_sequence_dof.png, metrics.png, filmstrip.png).
+
+The default is a reduced study (100 pairs, 20-frame windows: about 2 minutes on 2 cores,
+training the maps included); --full runs the whole protocol (200 pairs, windows of 10,
+20 and 40 frames: about 4 minutes). The pairs of a smaller study are the first pairs of
+a larger one with the same seed, scored identically.
+
+Examples:
+  upm eval --out upm-eval
+  upm eval --full --out upm-eval-full
+  upm eval --pairs 100 --windows 10,20 --seed 1 --workers 2 --out study
+"""
+
+from __future__ import annotations
+
+HELP = "the held-out study: every method on seeded pairs, tables, JSON, figures"
+
+#: The reduced default study.
+DEFAULT_PAIRS = 100
+DEFAULT_WINDOWS = (20,)
+#: The full study (--full).
+FULL_PAIRS = 200
+FULL_WINDOWS = (10, 20, 40)
+DEFAULT_OUT = "upm-eval"
+
+
+def configure(parser) -> None:
+    from upm.commands.common import add_data_argument
+
+    add_data_argument(parser)
+    parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
+                        help=f"output directory (default: ./{DEFAULT_OUT})")
+    parser.add_argument("--full", action="store_true",
+                        help=f"the full study: {FULL_PAIRS} pairs, windows "
+                             f"{','.join(map(str, FULL_WINDOWS))} (unless --pairs/--windows "
+                             "say otherwise)")
+    parser.add_argument("--pairs", type=int, metavar="N", default=None,
+                        help=f"transition pairs (default {DEFAULT_PAIRS}; --full: {FULL_PAIRS})")
+    parser.add_argument("--windows", metavar="L,L,...", default=None,
+                        help="window lengths in frames at 120 fps (default "
+                             f"{','.join(map(str, DEFAULT_WINDOWS))}; --full: "
+                             f"{','.join(map(str, FULL_WINDOWS))})")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--methods", nargs="+", metavar="M", default=None,
+                        help="methods to run (default: all; upm is needed for the paired "
+                             "comparisons and figures)")
+    parser.add_argument("--workers", type=int, metavar="K", default=None,
+                        help="worker processes (default: the usable cores; 1: no "
+                             "subprocesses). The numbers do not depend on it.")
+    parser.add_argument("--no-figures", dest="figures", action="store_false",
+                        help="skip the figures (no rendering)")
+
+
+def parse_windows(text: str | None, default) -> tuple[int, ...]:
+    """``"10,20,40"`` -> (10, 20, 40): whole numbers >= 2, no repeats."""
+    from upm.errors import UsageError
+
+    if text is None:
+        return tuple(default)
+    try:
+        values = tuple(int(v) for v in text.replace(" ", "").split(",") if v)
+    except ValueError:
+        raise UsageError(f"--windows must be whole numbers separated by commas, not "
+                         f"{text!r}") from None
+    if not values or any(v < 2 for v in values):
+        raise UsageError(f"--windows needs window lengths of at least 2 frames, not {text!r}")
+    if len(set(values)) != len(values):
+        raise UsageError(f"--windows {text}: a window length is repeated")
+    return values
+
+
+def run(args) -> int:
+    import sys
+    from pathlib import Path
+
+    from eval.outputs import figure_window, write_outputs
+    from eval.study import STUDY_METHODS, StudyConfig, run_study
+    from eval.tables import headline_text
+    from upm.catalog import Catalog
+    from upm.errors import UsageError
+    from upm.transitions import get_method
+
+    pairs = args.pairs if args.pairs is not None else (FULL_PAIRS if args.full
+                                                       else DEFAULT_PAIRS)
+    if pairs < 2:
+        raise UsageError(f"--pairs must be at least 2, not {pairs}")
+    windows = parse_windows(args.windows, FULL_WINDOWS if args.full else DEFAULT_WINDOWS)
+    methods = tuple(args.methods) if args.methods else STUDY_METHODS
+    for method in methods:
+        get_method(method)  # a one-line error naming the methods if unknown
+    if len(set(methods)) != len(methods):
+        raise UsageError("--methods: a method is repeated")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be at least 1, not {args.workers}")
+    if args.figures and not {"upm", "linear"} <= set(methods):
+        raise UsageError("the figures compare upm with linear: keep both in --methods, or "
+                         "pass --no-figures")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out}: exists and is not a directory")
+    catalog = Catalog(args.data)
+    config = StudyConfig(data_dir=str(catalog.root), pairs=pairs, windows=windows,
+                         seed=args.seed, methods=methods)
+    print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
+          f"{','.join(map(str, windows))}, seed {args.seed}", file=sys.stderr)
+    result = run_study(config, workers=args.workers)
+    report = write_outputs(result, out, figures=args.figures)
+
+    frames = figure_window(windows)
+    print(f"Held-out study: {pairs} pairs, window {frames} frames at 120 fps "
+          f"(mean [95 % interval]; {result.workers} workers, {result.wall_s:.0f} s)")
+    print(headline_text(report["statistics"], report["timing"], frames, methods))
+    paired = report["statistics"]["paired"].get(str(frames), {}).get("linear")
+    if paired:
+        from eval.metrics import HEADLINE
+        from eval.tables import DISPLAY, verdict
+
+        print("UPM - linear, paired (UPM wins/ties/losses):")
+        for metric in HEADLINE:
+            c = paired["all"][metric]
+            print(f"  {DISPLAY[metric][2]:<26} {verdict(c, metric):<20} "
+                  f"{c['wins']}/{c['ties']}/{c['losses']}")
+    ratio = report["timing"]["spacetime_over_upm"].get(str(frames))
+    if ratio is not None:
+        print(f"spacetime / UPM time per transition: {ratio:.1f}x (Table 4: table4.md)")
+    print(f"written to {out}/: results.json, summary.csv, paired.csv, summary.md, "
+          f"timing.json, table4.md" + (", figures (*.png)" if args.figures else ""))
+    return 0
