@@ -96,6 +96,11 @@ _METRICS = (
            "averaged over the window frames"),
     Metric("residual_force_peak_bw", "residual peak", "body weights", "lower",
            "the largest residual force in the window"),
+    Metric("tracking_error_deg", "tracking", "deg RMS", "lower",
+           "the humanoid's servos (human-strength torque limits) following the motion with "
+           "the root driven along it, from 30 frames before the window: joint error to the "
+           "reference over the window frames, RMS over the 45 hinges -- what the body cannot "
+           "do, or what its contacts and limits stop (controller.tracking, mode driven)"),
 )
 
 #: Every metric, by name, in table order.
@@ -104,7 +109,7 @@ METRICS: dict[str, Metric] = {m.name: m for m in _METRICS}
 #: The metrics of the headline table.
 HEADLINE: tuple[str, ...] = ("valid_pct", "added_limit_mean_deg", "self_collision_pct",
                              "nearest_real_mean_deg", "residual_force_mean_bw",
-                             "jerk_rms_deg_s3", "foot_skate_mps")
+                             "jerk_rms_deg_s3", "foot_skate_mps", "tracking_error_deg")
 
 
 def unwrap_time_deg(angles_deg) -> np.ndarray:

@@ -11,7 +11,8 @@ frames, segment 2 re-anchored) and a real window of a test clip (the calibration
 - **dynamics** (controller.dynamics.root_residual) on the window with
   :data:`RESIDUAL_CONTEXT` frames of the motion on each side, for the 12 Hz low-pass and
   the finite differences; the figures are read on the window's frames only;
-- **foot skating** from the same frames' foot geoms.
+- **foot skating** from the same frames' foot geoms;
+- **tracking** (controller.tracking, root driven) over the same frames, read on the window.
 """
 
 from __future__ import annotations
@@ -173,6 +174,7 @@ def score_window(model, motion, window: slice, real, zones) -> dict[str, float]:
     """
     from controller.dynamics import root_residual
     from controller.qpos import to_qpos
+    from controller.tracking import track
     from controller.validity import check_motion
 
     n = motion.n_frames
@@ -197,6 +199,8 @@ def score_window(model, motion, window: slice, real, zones) -> dict[str, float]:
     residual = root_residual(model, qpos, motion.fps).force_bw[w0 - c0:w1 - c0]
     centres, bottoms, foot = feet_over_frames(model, qpos)
     skate = foot_skate_mps(centres, bottoms, foot, motion.fps)[w0 - c0:w1 - c0]
+    tracking = track(model, motion.frames(c0, c1), mode="driven").summary(
+        slice(w0 - c0, w1 - c0))
 
     values = {
         "valid_pct": 100.0 * validity.valid_beyond_ends[inside].mean(),
@@ -214,5 +218,6 @@ def score_window(model, motion, window: slice, real, zones) -> dict[str, float]:
         "foot_skate_mps": skate.mean(),
         "residual_force_mean_bw": residual.mean(),
         "residual_force_peak_bw": residual.max(),
+        "tracking_error_deg": tracking["error_all_deg_rms"],
     }
     return {k: round(float(v), 6) for k, v in values.items()}
