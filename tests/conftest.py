@@ -38,3 +38,13 @@ def all_motions(catalog):
 @pytest.fixture(scope="session")
 def walk(catalog):
     return catalog.load("02_01")
+
+
+@pytest.fixture(scope="session")
+def model02(catalog):
+    """The MuJoCo humanoid of subject 02, built from its ASF (tests must not modify it)."""
+    import mujoco
+
+    from humanoid_xml import build_mjcf
+
+    return mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("02")))

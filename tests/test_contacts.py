@@ -15,7 +15,6 @@ from controller.contacts import (
     state_contacts,
     survey_clips,
 )
-from humanoid_xml import build_mjcf
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from tests.conftest import FLAT_WALK_RUN
 from upm import Motion
@@ -37,11 +36,6 @@ def cache(tmp_path_factory):
 @pytest.fixture(scope="module")
 def survey(catalog, cache):
     return survey_clips(catalog)
-
-
-@pytest.fixture(scope="module")
-def model02(catalog):
-    return mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("02")))
 
 
 def test_flat_walks_and_runs_rarely_touch_themselves(survey):

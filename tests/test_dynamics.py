@@ -5,7 +5,6 @@ real walks."""
 
 import mujoco
 import numpy as np
-import pytest
 from scipy.spatial.transform import Rotation
 
 from controller import to_qpos
@@ -19,12 +18,6 @@ from controller.dynamics import (
     unwrap_hinges,
 )
 from controller.qpos import joint_layout
-from humanoid_xml import build_mjcf
-
-
-@pytest.fixture(scope="module")
-def model02(catalog):
-    return mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("02")))
 
 
 def _still(model, n=20, lift_m=0.0):

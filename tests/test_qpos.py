@@ -17,11 +17,6 @@ from upm.rotations import euler_to_matrix
 from upm.skeleton import joint_dof_index
 
 
-@pytest.fixture(scope="module")
-def model02(catalog):
-    return mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("02")))
-
-
 def _joint_qpos(model, qpos, name):
     j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
     return qpos[:, model.jnt_qposadr[j]]

@@ -17,13 +17,7 @@ from controller.render import (
     side_view,
     write_video,
 )
-from humanoid_xml import catalog_model_path, load_model
 from upm.errors import UsageError
-
-
-@pytest.fixture(scope="module")
-def model02(catalog):
-    return load_model(catalog_model_path(catalog, "02"))
 
 
 @pytest.fixture(scope="module")

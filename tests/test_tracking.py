@@ -18,13 +18,7 @@ from controller.tracking import (
     track,
     track_qpos,
 )
-from humanoid_xml import catalog_model_path, load_model
 from upm.skeleton import joint_dof_index
-
-
-@pytest.fixture(scope="module")
-def model02(catalog):
-    return load_model(catalog_model_path(catalog, "02"))
 
 
 @pytest.fixture(scope="module")

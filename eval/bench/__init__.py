@@ -46,6 +46,26 @@ def timeit_best(fn: Callable[[], object], repeat: int = 5, number: int = 1) -> f
     return best
 
 
+def clip_on_humanoid(context: BenchContext, clip: str, quick_frames: int):
+    """A real clip (its first ``quick_frames`` frames in quick mode) and the humanoid of its
+    subject: the material of the MuJoCo benchmarks.
+
+    Returns
+    -------
+    motion : upm.Motion
+    model : mujoco.MjModel
+    """
+    from humanoid_xml import catalog_model_path, load_model
+    from upm.catalog import Catalog
+
+    catalog = Catalog(context.data_dir)
+    clip = clip if clip in catalog else catalog.names()[0]
+    motion = catalog.load(clip)
+    if context.quick:
+        motion = motion.frames(0, quick_frames)
+    return motion, load_model(catalog_model_path(catalog, clip))
+
+
 def discover() -> dict[str, object]:
     """The benchmark modules of this package, by ``NAME``, in module-name order."""
     found = {}

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import time
 
-from eval.bench import BenchContext, timeit_best
+from eval.bench import BenchContext, clip_on_humanoid, timeit_best
 
 NAME = "controller"
 
@@ -29,15 +29,9 @@ def run(context: BenchContext) -> dict:
     from controller.dynamics import root_residual
     from controller.tracking import plan_tracking, track
     from controller.validity import check_motion
-    from humanoid_xml import catalog_model_path, load_model
-    from upm.catalog import Catalog
 
-    catalog = Catalog(context.data_dir)
-    clip = "02_01" if "02_01" in catalog else catalog.names()[0]
-    motion = catalog.load(clip)
-    if context.quick:
-        motion = motion.frames(0, 120)
-    model = load_model(catalog_model_path(catalog, clip))
+    motion, model = clip_on_humanoid(context, "02_01", quick_frames=120)
+    clip = motion.name
     data = mujoco.MjData(model)
     qpos = to_qpos(model, motion)
     n = len(qpos)
@@ -96,9 +90,10 @@ def run(context: BenchContext) -> dict:
         out[f"tracking_{mode}_ratio_to_raw"] = result.steps_per_s / (plan.steps / raw_s)
     if not context.quick:
         from controller.validity import calibrate
+        from upm.catalog import Catalog
 
         start = time.perf_counter()
-        calibration = calibrate(catalog)
+        calibration = calibrate(Catalog(context.data_dir))
         seconds = time.perf_counter() - start
         frames = calibration.totals()["frames"]
         out["calibration_all_clips_s"] = seconds

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 
-from eval.bench import BenchContext, timeit_best
+from eval.bench import BenchContext, clip_on_humanoid, timeit_best
 
 NAME = "humanoid"
 
@@ -18,16 +18,11 @@ def run(context: BenchContext) -> dict:
 
     from controller import to_qpos
     from controller.contacts import contacts_over_frames
-    from humanoid_xml import build_mjcf, load_model, subject_model_path
-    from upm.catalog import Catalog
+    from humanoid_xml import build_mjcf
 
-    catalog = Catalog(context.data_dir)
-    clip = "02_07" if "02_07" in catalog else catalog.names()[0]
-    motion = catalog.load(clip)
-    if context.quick:
-        motion = motion.frames(0, 200)
+    motion, model = clip_on_humanoid(context, "02_07", quick_frames=200)
+    clip = motion.name
     build_s = timeit_best(lambda: build_mjcf(motion.skeleton), repeat=1 if context.quick else 3)
-    model = load_model(subject_model_path(catalog.info(clip).asf_path))
     data = mujoco.MjData(model)
     qpos = to_qpos(model, motion)
     n = len(qpos)

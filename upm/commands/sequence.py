@@ -35,21 +35,13 @@ def run(args) -> int:
     import json
 
     from upm.amc import write_amc
-    from upm.catalog import Catalog, parse_clip_ref
+    from upm.commands.transition import sequence_from_args
     from upm.errors import UsageError
     from upm.fileio import atomic_write_text
-    from upm.progress import progress
-    from upm.transitions import build_sequence
-    from upm.transitions.load import key_source_for
 
     if len(args.pieces) < 2:
         raise UsageError("a sequence needs at least two pieces (CLIP@A:B CLIP@A:B ...)")
-    catalog = Catalog(args.data)
-    refs = [parse_clip_ref(text) for text in args.pieces]
-    pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
-    key_source = key_source_for(args.method, args.map, catalog)
-    sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
-                              fps=args.fps, align_heading=args.align_heading)
+    catalog, refs, sequence = sequence_from_args(args, args.pieces)
     write_amc(args.out, sequence.motion)
     motion = sequence.motion
     report = {

@@ -74,11 +74,8 @@ def run(args) -> int:
     )
     from controller.report import write_report
     from humanoid_xml import catalog_model_path, load_model
-    from upm.catalog import Catalog, parse_clip_ref
+    from upm.commands.transition import sequence_from_args
     from upm.errors import UsageError
-    from upm.progress import progress
-    from upm.transitions import build_sequence
-    from upm.transitions.load import key_source_for
 
     render = args.render or args.modes[0]
     if render != "reference" and render not in args.modes:
@@ -91,12 +88,7 @@ def run(args) -> int:
     if args.viewer and not has_display():
         raise UsageError("--viewer needs a display (DISPLAY is not set); use --video V.mp4 "
                          "to render offscreen instead")
-    catalog = Catalog(args.data)
-    refs = [parse_clip_ref(text) for text in args.sequence]
-    pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
-    key_source = key_source_for(args.method, args.map, catalog)
-    sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
-                              fps=args.fps, align_heading=args.align_heading)
+    catalog, refs, sequence = sequence_from_args(args, args.sequence)
     motion = sequence.motion
     if motion.n_frames < 2:
         raise UsageError("the sequence has fewer than 2 frames: nothing to simulate")

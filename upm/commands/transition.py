@@ -37,6 +37,29 @@ def add_method_arguments(parser, default_method: str = "upm") -> None:
                              "previous clip's heading")
 
 
+def sequence_from_args(args, pieces_text: list[str]):
+    """The clips named on the command line joined by ``--method`` transitions.
+
+    Returns
+    -------
+    catalog : upm.catalog.Catalog
+    refs : list of upm.catalog.ClipRef
+    sequence : upm.transitions.Sequence
+    """
+    from upm.catalog import Catalog, parse_clip_ref
+    from upm.progress import progress
+    from upm.transitions import build_sequence
+    from upm.transitions.load import key_source_for
+
+    catalog = Catalog(args.data)
+    refs = [parse_clip_ref(text) for text in pieces_text]
+    pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
+    key_source = key_source_for(args.method, args.map, catalog)
+    sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
+                              fps=args.fps, align_heading=args.align_heading)
+    return catalog, refs, sequence
+
+
 def configure(parser) -> None:
     from upm.commands.common import add_data_argument
 
