@@ -54,6 +54,7 @@ def _time_pair(pair, motions, lengths, real, upm, model, repeat: int) -> dict[st
     """Milliseconds of each part of scoring one pair's UPM window, and of making it."""
     from controller.dynamics import root_residual
     from controller.qpos import to_qpos
+    from controller.tracking import track
     from controller.validity import check_motion
     from eval.metrics import window_jerk_rms
     from eval.pairs import exclusion_zones
@@ -66,7 +67,8 @@ def _time_pair(pair, motions, lengths, real, upm, model, repeat: int) -> dict[st
     t = transition("upm", before, after, WINDOW, 0.5, upm)
     w0, w1 = t.window.start, t.window.stop
     ends = t.motion.frames(w0 - 1, w1 + 1)
-    qpos = to_qpos(model, t.motion.frames(w0 - RESIDUAL_CONTEXT, w1 + RESIDUAL_CONTEXT))
+    context_motion = t.motion.frames(w0 - RESIDUAL_CONTEXT, w1 + RESIDUAL_CONTEXT)
+    qpos = to_qpos(model, context_motion)
     score_window(model, t.motion, t.window, real, zones)  # first-use imports out of the way
     timed = {
         "transition_upm": lambda: transition("upm", before, after, WINDOW, 0.5, upm),
@@ -77,5 +79,6 @@ def _time_pair(pair, motions, lengths, real, upm, model, repeat: int) -> dict[st
                                         real.dofs),
         "residual": lambda: root_residual(model, qpos, t.motion.fps),
         "feet": lambda: feet_over_frames(model, qpos),
+        "tracking": lambda: track(model, context_motion, mode="driven"),
     }
     return {key: 1000.0 * timeit_best(fn, repeat=repeat) for key, fn in timed.items()}
