@@ -334,7 +334,7 @@ def _rewrite(src, dst, **changes):
 
 
 @pytest.mark.parametrize("case, message", [
-    ("garbage", "not a readable posture map"),
+    ("garbage", "not an .npz \\(zip\\) archive"),
     ("truncated", "not a readable posture map"),
     ("other npz", "no 'format' field"),
     ("version", "format version 99 is not supported"),

@@ -336,6 +336,16 @@ class ClassMaps:
 def _read_npz(path) -> dict:
     """Every array of a posture-map file, checked for format and version."""
     try:
+        with open(path, "rb") as handle:
+            magic = handle.read(4)
+    except FileNotFoundError:
+        raise DataFileError(path, "no such file") from None
+    except OSError as exc:
+        raise DataFileError(path, f"cannot read: {exc.strerror}") from None
+    if magic != b"PK\x03\x04":  # every .npz is a zip archive
+        raise DataFileError(path, "not a posture map: not an .npz (zip) archive "
+                                  "(write one with 'upm train --out MAP.npz')")
+    try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}
     except FileNotFoundError:
