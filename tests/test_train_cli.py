@@ -66,7 +66,7 @@ def test_bad_input_is_one_line_exit_2(data_dir, tmp_path):
         (["train", "--data", str(data_dir), "--clips", "09_06", "--learning-rate", "2",
           "--out", str(tmp_path / "x.npz")], "learning_rate must be in (0, 1)"),
         (["train", "--data", str(data_dir)], "required: --out"),
-        (["map-info", str(bad_map)], "not a readable posture map"),
+        (["map-info", str(bad_map)], "not an .npz (zip) archive"),
         (["map-info", str(tmp_path / "absent.npz")], "no such file"),
     ]
     for args, message in cases:
