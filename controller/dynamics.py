@@ -111,6 +111,18 @@ def lowpass_qpos(model, qpos, fps: float, cutoff_hz: float = LOWPASS_HZ) -> np.n
     return out
 
 
+def half_step_velocities(model, qpos, fps: float) -> np.ndarray:
+    """``mj_differentiatePos(q(t), q(t+1)) * fps``: the velocity between consecutive
+    states (the free joint's rotation on the quaternion manifold), shape (T-1, nv)."""
+    import mujoco
+
+    qpos = np.atleast_2d(qpos)
+    out = np.zeros((max(qpos.shape[0] - 1, 0), model.nv))
+    for t in range(qpos.shape[0] - 1):
+        mujoco.mj_differentiatePos(model, out[t], 1.0 / fps, qpos[t], qpos[t + 1])
+    return out
+
+
 def finite_differences(model, qpos, fps: float) -> tuple[np.ndarray, np.ndarray]:
     """Velocities and accelerations of a trajectory by central differences.
 
@@ -127,13 +139,9 @@ def finite_differences(model, qpos, fps: float) -> tuple[np.ndarray, np.ndarray]
     qacc : ndarray, shape (T, nv)
         Zero for a single frame; ``qacc`` is zero for two.
     """
-    import mujoco
-
     qpos = unwrap_hinges(model, qpos)
     n = qpos.shape[0]
-    half = np.zeros((max(n - 1, 0), model.nv))
-    for t in range(n - 1):
-        mujoco.mj_differentiatePos(model, half[t], 1.0 / fps, qpos[t], qpos[t + 1])
+    half = half_step_velocities(model, qpos, fps)
     qvel = np.zeros((n, model.nv))
     qacc = np.zeros((n, model.nv))
     if n < 2:

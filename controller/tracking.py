@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.contacts import SELF_COLLISION_DEPTH_M
+from controller.dynamics import half_step_velocities
 
 #: Fallen: pelvis or head below this share of its standing height (the reference's not).
 FALL_FRACTION = 0.5
@@ -327,7 +328,7 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
     sim.opt.timestep = 1.0 / (fps * substeps)
     free_q = slice(layout.free_qpos, layout.free_qpos + 7)
     free_v = slice(layout.free_dof, layout.free_dof + 6)
-    half_vel = _half_step_velocities(sim, ref, fps)  # (T-1, nv)
+    half_vel = half_step_velocities(sim, ref, fps)  # (T-1, nv)
     ctrl = _actuator_targets(sim, ref, substeps, servo_lead_s(sim) * fps * float(lead))
     driven = mode == "driven"
     start = ref[0].copy()
@@ -461,16 +462,6 @@ def _root_body(model) -> int:
 
 def _wrap_rad(x):
     return np.mod(x + np.pi, 2 * np.pi) - np.pi
-
-
-def _half_step_velocities(model, qpos, fps: float) -> np.ndarray:
-    """``mj_differentiatePos(q(t), q(t+1)) * fps``, shape (T-1, nv)."""
-    import mujoco
-
-    out = np.zeros((qpos.shape[0] - 1, model.nv))
-    for t in range(qpos.shape[0] - 1):
-        mujoco.mj_differentiatePos(model, out[t], 1.0 / fps, qpos[t], qpos[t + 1])
-    return out
 
 
 def servo_lead_s(model) -> np.ndarray:

@@ -16,6 +16,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from upm.angles import angle_diff_deg, unwrap_deg
 from upm.skeleton import JOINTS, POSTURE_DOF_NAMES
 
 #: The DOFs the paper's Fig. 13 is about: the right shoulder (CMU's clavicle and humerus).
@@ -38,7 +39,7 @@ def _segment(transition, context: int) -> tuple[np.ndarray, np.ndarray]:
     first = max(0, a - context)
     stop = min(motion.n_frames, transition.b_index + 1 + context)
     times = np.arange(first, stop) - a
-    return times, np.unwrap(motion.posture_deg[first:stop], period=360.0, axis=0)
+    return times, unwrap_deg(motion.posture_deg[first:stop])
 
 
 def choose_dof(transitions: Mapping[str, object]) -> str:
@@ -49,9 +50,9 @@ def choose_dof(transitions: Mapping[str, object]) -> str:
     first = items[0].window_posture_deg[:, indices]
     if len(items) > 1:
         second = items[1].window_posture_deg[:, indices]
-        spread = np.abs(np.mod(first - second + 180.0, 360.0) - 180.0).max(axis=0)
+        spread = np.abs(angle_diff_deg(first, second)).max(axis=0)
     else:
-        spread = np.ptp(np.unwrap(first, period=360.0, axis=0), axis=0)
+        spread = np.ptp(unwrap_deg(first), axis=0)
     return SHOULDER_DOFS[int(np.argmax(spread))]
 
 
