@@ -58,6 +58,8 @@ from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from humanoid_xml.frames import vectors_to_mj
 from humanoid_xml.servos import servo_gains
 from humanoid_xml.strength import torque_limits_nm
+from humanoid_xml.validate import check_skeleton
+from upm.errors import DataFileError
 from upm.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
@@ -217,7 +219,14 @@ def build_mjcf(skeleton: Skeleton) -> str:
     -------
     str
         A complete, self-contained MJCF document.
+
+    Raises
+    ------
+    DataFileError
+        Naming the skeleton's file, if the humanoid cannot be built from it
+        (:func:`humanoid_xml.validate.check_skeleton`) or MuJoCo refuses the result.
     """
+    check_skeleton(skeleton)
     geoms = capsules(skeleton)
     stature = stature_m(skeleton, geoms)
     mass = body_mass_kg(stature)
@@ -230,8 +239,13 @@ def build_mjcf(skeleton: Skeleton) -> str:
                f"{int(skeleton.declared.sum())} hinges")
     import mujoco
 
-    draft = mujoco.MjModel.from_xml_string(_document(skeleton, geoms, root_height, [], summary,
-                                                     stature))
+    try:
+        draft = mujoco.MjModel.from_xml_string(_document(skeleton, geoms, root_height, [],
+                                                         summary, stature))
+    except (ValueError, mujoco.FatalError) as exc:
+        message = " ".join(str(exc).split())
+        raise DataFileError(skeleton.source, f"MuJoCo refuses the humanoid built from it: "
+                                             f"{message}") from None
     strength = torque_limits_nm(hinge_names(skeleton), mass, stature)
     gains = servo_gains(draft, strength)
     return _document(skeleton, geoms, root_height, _actuators(skeleton, gains, strength),

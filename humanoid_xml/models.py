@@ -90,7 +90,7 @@ def load_model(path: str | os.PathLike):
 
     try:
         return mujoco.MjModel.from_xml_path(os.fspath(path))
-    except ValueError as exc:
+    except (ValueError, mujoco.FatalError) as exc:
         message = " ".join(str(exc).split())
         raise DataFileError(path, f"MuJoCo cannot load it: {message}") from None
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 
 import numpy as np
 
@@ -18,6 +19,11 @@ from upm.fileio import atomic_open
 from upm.motion import Motion
 from upm.skeleton import JOINTS, ROOT_CHANNELS, Skeleton, joint_dof_index
 from upm.textfile import read_text_lines
+
+#: Largest magnitude accepted for an AMC value (degrees, radians or ASF length units):
+#: far beyond any real motion, small enough that kinematics and dynamics stay finite.
+MAX_ABS_VALUE = 1e6
+_FRAME_NUMBER = re.compile(r"[0-9]{1,9}")
 
 
 class ChannelLayout:
@@ -96,8 +102,9 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
     ------
     DataFileError
         Naming file and line: unknown bone, a bone missing from a frame or given twice,
-        a wrong number of values, a non-numeric, NaN or infinite value, frame numbers out
-        of order, a truncated last frame, no frames at all.
+        a wrong number of values, a non-numeric, NaN or infinite value or one beyond
+        :data:`MAX_ABS_VALUE`, a frame number that is not 1 to 9 ASCII digits, frame
+        numbers out of order, a truncated last frame, no frames at all.
     """
     lines = read_text_lines(path, "AMC")
     layout = ChannelLayout(skeleton)
@@ -137,7 +144,7 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
             elif keyword == ":DEGREES":
                 radians = False
             continue
-        if len(parts) == 1 and head.isdigit():
+        if len(parts) == 1 and _FRAME_NUMBER.fullmatch(head):
             number = int(head)
             if row is not None:
                 close_frame(lineno)
@@ -182,6 +189,13 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
         bone = next(b for b, c, n in layout.bones if c <= column < c + n)
         lineno = _find_bone_line(lines, frame_lines[frame], bone)
         raise DataFileError(path, f"NaN or infinite value for bone {bone!r}", lineno)
+    huge = np.abs(values) > MAX_ABS_VALUE
+    if huge.any():
+        frame, column = np.argwhere(huge)[0]
+        bone = next(b for b, c, n in layout.bones if c <= column < c + n)
+        lineno = _find_bone_line(lines, frame_lines[frame], bone)
+        raise DataFileError(path, f"value {values[frame, column]:g} for bone {bone!r} is beyond "
+                                  f"the accepted magnitude {MAX_ABS_VALUE:g}", lineno)
     label = name if name is not None else os.path.splitext(os.path.basename(path))[0]
     return _to_motion(skeleton, layout, values, fps, radians, label)
 

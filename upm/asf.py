@@ -16,6 +16,13 @@ from upm.textfile import read_text_lines
 _INCH_M = 0.0254
 _ROTATION_DOFS = ("rx", "ry", "rz")
 _ROOT_CHANNELS = ("tx", "ty", "tz", "rx", "ry", "rz")
+#: Bounds on what an ASF may declare. Far beyond any real skeleton (CMU: 31 bones, 9
+#: deep, bones under 0.5 m), tight enough that geometry and the humanoid stay finite.
+MAX_BONES = 200
+MAX_DEPTH = 64
+MAX_ABS_NUMBER = 1e6
+MAX_BONE_LENGTH_M = 100.0
+LENGTH_UNIT_RANGE = (1e-6, 1e6)
 
 
 def _floats(path, lineno: int, tokens: list[str], count: int, what: str) -> list[float]:
@@ -28,6 +35,9 @@ def _floats(path, lineno: int, tokens: list[str], count: int, what: str) -> list
                             lineno) from None
     if not all(math.isfinite(v) for v in values):
         raise DataFileError(path, f"{what} has a NaN or infinite value", lineno)
+    if any(abs(v) > MAX_ABS_NUMBER for v in values):
+        raise DataFileError(path, f"{what} has a value beyond {MAX_ABS_NUMBER:g}: "
+                                  f"{' '.join(tokens)}", lineno)
     return values
 
 
@@ -75,8 +85,10 @@ def _parse_units(path, entries) -> tuple[float, str]:
         key = tokens[0].lower()
         if key == "length":
             (length_unit,) = _floats(path, lineno, tokens[1:], 1, "units length")
-            if length_unit <= 0:
-                raise DataFileError(path, "units length must be positive", lineno)
+            low, high = LENGTH_UNIT_RANGE
+            if not low <= length_unit <= high:
+                raise DataFileError(path, f"units length {length_unit:g} is outside "
+                                          f"[{low:g}, {high:g}]", lineno)
         elif key == "angle":
             if len(tokens) != 2 or tokens[1].lower() not in ("deg", "rad"):
                 raise DataFileError(path, "units angle must be 'deg' or 'rad'", lineno)
@@ -112,6 +124,8 @@ def _parse_bones(path, entries, angle_unit: str) -> list[_Bone]:
         tokens = line.split()
         key = tokens[0].lower()
         if key == "begin":
+            if len(bones) >= MAX_BONES:
+                raise DataFileError(path, f"more than {MAX_BONES} bones", lineno)
             if bone is not None:
                 raise DataFileError(path, "'begin' inside a bone (missing 'end')", lineno)
             bone, in_limits = _Bone(lineno), False
@@ -248,13 +262,17 @@ def read_asf(path: str | os.PathLike) -> Skeleton:
         by_name[bone.name] = bone
     children = _parse_hierarchy(path, sections["hierarchy"], set(by_name))
 
-    order, parents = ["root"], [-1]
+    order, parents, depths = ["root"], [-1], [0]
     stack = [(kid, 0) for kid in reversed(children.get("root", []))]
     while stack:
         name, parent_index = stack.pop()
         order.append(name)
         parents.append(parent_index)
         index = len(order) - 1
+        depths.append(depths[parent_index] + 1)
+        if depths[index] > MAX_DEPTH:
+            raise DataFileError(path, f"bone {name!r} is more than {MAX_DEPTH} bones deep "
+                                      "in :hierarchy", by_name[name].line)
         stack.extend((kid, index) for kid in reversed(children.get(name, [])))
     unreached = [b.name for b in bones if b.name not in set(order)]
     if unreached:
@@ -279,6 +297,9 @@ def read_asf(path: str | os.PathLike) -> Skeleton:
         norm = np.linalg.norm(d)
         directions[i] = d / norm if norm > 0 else d
         lengths[i] = bone.length * length_to_m
+        if lengths[i] > MAX_BONE_LENGTH_M:
+            raise DataFileError(path, f"bone {name!r} is {lengths[i]:.3g} m long (more than "
+                                      f"{MAX_BONE_LENGTH_M:g} m)", bone.line)
         axis_deg[i] = bone.axis
         axis_order[i] = bone.axis_order
         dofs[i] = bone.dofs
@@ -303,4 +324,5 @@ def read_asf(path: str | os.PathLike) -> Skeleton:
         root_axis_order=root_axis,
         length_to_m=length_to_m,
         angle_unit=angle_unit,
+        bone_lines=(root_line or 0, *(by_name[name].line for name in order[1:])),
     )

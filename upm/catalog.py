@@ -2,14 +2,16 @@
 
 The clips of a data directory are its ``NN/NN_MM.amc`` files, each read with its
 subject's ``NN/NN.asf``. A ``clips.csv`` beside them, where present, adds each clip's
-frame rate, description and train/test split; a clip missing from it is read at 120 fps
-with a warning.
+frame rate, description and train/test split. A clip without a frame rate (missing
+from ``clips.csv``, or no ``clips.csv`` at all) is read at 120 fps with a one-line
+warning: never silently.
 """
 
 from __future__ import annotations
 
 import csv
 import functools
+import io
 import os
 import re
 import warnings
@@ -23,6 +25,10 @@ from upm.motion import Motion
 from upm.skeleton import Skeleton
 
 DEFAULT_FPS = 120.0
+#: Highest frame rate clips.csv may give (motion capture runs at up to a few kHz).
+MAX_FPS = 10000.0
+#: Largest clips.csv read (the CMU list of 2,600 clips is about 200 kB).
+MAX_MANIFEST_BYTES = 16 * 1024 * 1024
 _CLIP_FILE = re.compile(r"^(\d+)_(\d+)\.amc$", re.IGNORECASE)
 _CLIP_REF = re.compile(r"^(?P<name>[^@\s]+)(?:@(?P<start>-?\d*)(?::(?P<stop>-?\d*))?)?$")
 
@@ -127,6 +133,7 @@ class Catalog:
             raise UsageError(f"data directory {self.root} does not exist")
         listed = self._read_manifest(self.root / "clips.csv")
         clips: dict[str, ClipInfo] = {}
+        unlisted: list[str] = []
         for amc in sorted(self.root.glob("*/*.amc")):
             match = _CLIP_FILE.match(amc.name)
             if not match:
@@ -136,6 +143,8 @@ class Catalog:
             if row is None and listed:
                 warnings.warn(f"{name} is not in clips.csv: read at {DEFAULT_FPS:g} fps",
                               stacklevel=2)
+            elif row is None:
+                unlisted.append(name)
             clips[name] = ClipInfo(
                 name=name,
                 subject=subject,
@@ -148,34 +157,34 @@ class Catalog:
             )
         if not clips:
             raise UsageError(f"no clips (NN/NN_MM.amc files) under {self.root}")
+        if unlisted:
+            warnings.warn(f"no clips.csv in {self.root}: its {len(unlisted)} clips are read at "
+                          f"{DEFAULT_FPS:g} fps (an AMC file carries no frame rate)",
+                          stacklevel=2)
         self._clips = dict(sorted(clips.items(), key=lambda kv: _clip_sort_key(kv[0])))
 
     @staticmethod
     def _read_manifest(path: Path) -> dict[str, dict]:
         if not path.exists():
             return {}
-        rows = {}
-        with open(path, newline="", encoding="utf-8") as handle:
-            reader = csv.DictReader(handle)
-            need = {"clip", "fps"}
-            if not reader.fieldnames or not need <= set(reader.fieldnames):
-                raise DataFileError(path, "clips.csv needs at least the columns clip, fps", 1)
-            for lineno, row in enumerate(reader, start=2):
-                try:
-                    fps = float(row["fps"])
-                    frames = int(row["frames"]) if row.get("frames") else None
-                except ValueError:
-                    raise DataFileError(path, f"bad fps or frames for {row['clip']}",
-                                        lineno) from None
-                if not fps > 0:
-                    raise DataFileError(path, f"fps must be positive for {row['clip']}", lineno)
-                rows[row["clip"]] = {
-                    "fps": fps,
-                    "frames": frames,
-                    "split": (row.get("split") or "").strip(),
-                    "description": (row.get("description") or "").strip(),
-                }
-        return rows
+        try:
+            data = path.read_bytes()
+        except OSError as exc:
+            raise DataFileError(path, f"cannot read clips.csv: {exc.strerror or exc}") from None
+        if len(data) > MAX_MANIFEST_BYTES:
+            raise DataFileError(path, f"clips.csv is larger than {MAX_MANIFEST_BYTES} bytes")
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            line = data[:exc.start].count(b"\n") + 1
+            raise DataFileError(path, "clips.csv is not UTF-8 text", line) from None
+        if "\x00" in text:
+            raise DataFileError(path, "binary data, not a text clips.csv")
+        reader = csv.DictReader(io.StringIO(text, newline=""))
+        try:
+            return _manifest_rows(path, reader)
+        except csv.Error as exc:
+            raise DataFileError(path, f"malformed CSV: {exc}", reader.line_num or None) from None
 
     def __iter__(self):
         return iter(self._clips.values())
@@ -224,6 +233,38 @@ class Catalog:
             raise UsageError(f"{ref}: frames out of range (clip {ref.name} has {n} frames, "
                              f"numbered 0 to {n - 1})")
         return motion.frames(start, stop)
+
+
+def _manifest_rows(path: Path, reader: csv.DictReader) -> dict[str, dict]:
+    need = {"clip", "fps"}
+    if not reader.fieldnames or not need <= set(reader.fieldnames):
+        raise DataFileError(path, "clips.csv needs at least the columns clip, fps", 1)
+    rows = {}
+    for row in reader:
+        lineno = reader.line_num
+        clip = (row.get("clip") or "").strip()
+        if not clip:
+            raise DataFileError(path, "a row without a clip name", lineno)
+        if row.get("fps") is None or None in row:
+            raise DataFileError(path, f"the row of {clip} does not have the header's "
+                                      f"{len(reader.fieldnames)} columns", lineno)
+        try:
+            fps = float(row["fps"])
+            frames = int(row["frames"]) if (row.get("frames") or "").strip() else None
+        except ValueError:
+            raise DataFileError(path, f"bad fps or frames for {clip}", lineno) from None
+        if not 0 < fps <= MAX_FPS:
+            raise DataFileError(path, f"fps {row['fps'].strip()} for {clip} is outside "
+                                      f"(0, {MAX_FPS:g}]", lineno)
+        if frames is not None and frames < 0:
+            raise DataFileError(path, f"negative frame count for {clip}", lineno)
+        rows[clip] = {
+            "fps": fps,
+            "frames": frames,
+            "split": (row.get("split") or "").strip(),
+            "description": (row.get("description") or "").strip(),
+        }
+    return rows
 
 
 @functools.lru_cache(maxsize=64)

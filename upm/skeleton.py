@@ -89,6 +89,9 @@ class Skeleton:
         Metres per ASF length unit (0.0254 / ``:units length``; 0.056444 for CMU).
     angle_unit : str
         ``"deg"`` or ``"rad"`` as declared by ``:units angle``.
+    bone_lines : tuple of int
+        Line of each bone's ``begin`` in ``source`` (for messages); empty when the
+        skeleton was not read from an ASF.
     limits_deg : ndarray, shape (63, 2)
         Posture DOF limits, [0, 0] where a DOF is not declared.
     declared : ndarray of bool, shape (63,)
@@ -110,6 +113,7 @@ class Skeleton:
     root_axis_order: str
     length_to_m: float
     angle_unit: str = "deg"
+    bone_lines: tuple[int, ...] = ()
     limits_deg: np.ndarray = field(init=False)
     declared: np.ndarray = field(init=False)
 
