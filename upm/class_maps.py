@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import os
 import zipfile
+import zlib
 from typing import ClassVar
 
 import numpy as np
@@ -299,9 +300,9 @@ class ClassMaps:
         return self
 
     def _restore(self, arrays: dict, path) -> None:
-        names = tuple(str(x) for x in arrays["class_names"])
+        names = _text_list(arrays, "class_names", path)
         slices = np.asarray(arrays["class_slices"])
-        dofs = tuple(str(x) for x in arrays["dof_names"])
+        dofs = _text_list(arrays, "dof_names", path)
         expected = np.array([[CLASS_SLICES[c].start, CLASS_SLICES[c].stop] for c in CLASS_NAMES])
         if (names != CLASS_NAMES or slices.shape != expected.shape
                 or not np.array_equal(slices, expected) or dofs != POSTURE_DOF_NAMES):
@@ -314,6 +315,7 @@ class ClassMaps:
             self.provenance = dict(meta["provenance"])
         except (ValueError, KeyError, TypeError):
             raise DataFileError(path, "corrupt metadata (meta_json)") from None
+        _check_meta(self.stats, self.provenance, path)
         neurons = {}
         for c in CLASS_NAMES:
             key = f"neurons_{c}"
@@ -333,8 +335,25 @@ class ClassMaps:
         self._restore_extra(arrays, path)
 
 
+#: Bounds on a map archive, checked from the zip directory before anything is
+#: decompressed (a zip bomb is refused unread). A 2,000-neuron map is under 2 MB.
+MAX_MEMBERS = 64
+MAX_UNCOMPRESSED_BYTES = 1 << 30
+MAX_COMPRESSION_RATIO = 1000
+#: What reading a damaged archive member can raise (zip, zlib, the .npy header).
+_ARCHIVE_ERRORS = (OSError, ValueError, EOFError, KeyError, TypeError, SyntaxError,
+                   RuntimeError, NotImplementedError, OverflowError, zipfile.BadZipFile,
+                   zlib.error)
+
+
 def _read_npz(path) -> dict:
-    """Every array of a posture-map file, checked for format and version."""
+    """Every array of a posture-map file, checked for format and version.
+
+    The archive is read member by member with ``allow_pickle=False`` (an object array
+    is refused, never unpickled), after its directory is checked against
+    :data:`MAX_MEMBERS`, :data:`MAX_UNCOMPRESSED_BYTES` and
+    :data:`MAX_COMPRESSION_RATIO`.
+    """
     try:
         with open(path, "rb") as handle:
             magic = handle.read(4)
@@ -346,28 +365,92 @@ def _read_npz(path) -> dict:
         raise DataFileError(path, "not a posture map: not an .npz (zip) archive "
                                   "(write one with 'upm train --out MAP.npz')")
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
-    except FileNotFoundError:
-        raise DataFileError(path, "no such file") from None
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
-        raise DataFileError(path, f"not a readable posture map (.npz): {exc}") from None
-    if not isinstance(arrays, dict) or "format" not in arrays:
+        with zipfile.ZipFile(path) as archive:
+            members = archive.infolist()
+            _check_members(path, members)
+            arrays = {}
+            for info in members:
+                with archive.open(info) as member:
+                    arrays[info.filename[:-len(".npy")]] = np.lib.format.read_array(
+                        member, allow_pickle=False)
+    except DataFileError:
+        raise
+    except _ARCHIVE_ERRORS as exc:
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
+        if "allow_pickle" in reason:
+            reason = "it holds a Python object array, which is never unpickled"
+        raise DataFileError(path, f"not a readable posture map (.npz): {reason}") from None
+    if "format" not in arrays:
         raise DataFileError(path, "not a posture map file (no 'format' field)")
     if _text(arrays, "format", path) != FILE_FORMAT:
         raise DataFileError(path, f"not a posture map file (format "
                                   f"{_text(arrays, 'format', path)!r})")
-    try:
-        version = int(arrays["format_version"])
-    except (KeyError, TypeError, ValueError):
-        raise DataFileError(path, "no valid format_version") from None
-    if version != FORMAT_VERSION:
-        raise DataFileError(path, f"format version {version} is not supported (this program "
-                                  f"reads version {FORMAT_VERSION}); train the map again")
+    version = arrays.get("format_version")
+    if version is None or version.shape != () or version.dtype.kind not in "iu":
+        raise DataFileError(path, "no valid format_version")
+    if int(version) != FORMAT_VERSION:
+        raise DataFileError(path, f"format version {int(version)} is not supported (this "
+                                  f"program reads version {FORMAT_VERSION}); train the map again")
     for key in ("kind", "class_names", "class_slices", "dof_names", "meta_json"):
         if key not in arrays:
             raise DataFileError(path, f"missing field {key}")
     return arrays
+
+
+def _check_members(path, members) -> None:
+    if len(members) > MAX_MEMBERS:
+        raise DataFileError(path, f"not a posture map: {len(members)} archive members "
+                                  f"(at most {MAX_MEMBERS})")
+    total = 0
+    for info in members:
+        if not info.filename.endswith(".npy") or info.filename.count("/"):
+            raise DataFileError(path, f"not a posture map: archive member {info.filename!r} "
+                                      "is not an .npy array")
+        total += info.file_size
+        ratio = info.file_size / max(info.compress_size, 1)
+        if total > MAX_UNCOMPRESSED_BYTES or ratio > MAX_COMPRESSION_RATIO:
+            raise DataFileError(path, f"archive member {info.filename!r} would decompress to "
+                                      f"{info.file_size} bytes (ratio {ratio:.0f}): refused "
+                                      "unread as a possible zip bomb")
+
+
+def _text_list(arrays: dict, key: str, path) -> tuple[str, ...]:
+    value = arrays[key]
+    if value.ndim != 1 or value.dtype.kind != "U":
+        raise DataFileError(path, f"field {key} must be a list of names, not {value.dtype} "
+                                  f"{value.shape}")
+    return tuple(str(x) for x in value)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
+
+
+def _check_meta(stats: dict, provenance: dict, path) -> None:
+    """Refuse metadata the summaries (``upm train``, ``upm map-info``) cannot print."""
+    def bad(what: str):
+        return DataFileError(path, f"corrupt metadata (meta_json): {what}")
+
+    if set(stats) != set(CLASS_NAMES):
+        raise bad(f"stats must cover the classes {', '.join(CLASS_NAMES)}")
+    for c, s in stats.items():
+        if not isinstance(s, dict):
+            raise bad(f"stats of {c} is not a record")
+        for key in ("neurons", "quantisation_error_mean_deg", "quantisation_error_max_deg"):
+            if not _is_number(s.get(key)):
+                raise bad(f"stats of {c} lacks a number {key}")
+        if s.get("radius_deg") is not None and not _is_number(s["radius_deg"]):
+            raise bad(f"stats of {c}: radius_deg is not a number")
+        grid = s.get("grid")
+        if grid is not None and not (isinstance(grid, list) and len(grid) == 2
+                                     and all(isinstance(v, int) for v in grid)):
+            raise bad(f"stats of {c}: grid is not [rows, cols]")
+    names = provenance.get("clip_names", [])
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise bad("provenance clip_names is not a list of names")
+    for key in ("n_samples", "train_seconds"):
+        if provenance.get(key) is not None and not _is_number(provenance[key]):
+            raise bad(f"provenance {key} is not a number")
 
 
 def _text(arrays: dict, key: str, path) -> str:
