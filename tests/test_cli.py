@@ -1,6 +1,7 @@
 """The command line: help, clips, one-line errors with exit code 2."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -64,7 +65,37 @@ def test_malformed_data_is_one_line_exit_2(tmp_path, data_dir):
     (tmp_path / "02" / "02.asf").write_bytes((data_dir / "02" / "02.asf").read_bytes())
     text = (data_dir / "02" / "02_03.amc").read_text()
     (tmp_path / "02" / "02_03.amc").write_text(text.replace("lfemur", "lfemurX", 1))
+    (tmp_path / "clips.csv").write_text("clip,fps\n02_03,120\n")
     result = run("clips", "--data", str(tmp_path))
     assert result.returncode == 2
     assert "02_03.amc:" in result.stderr and "unknown bone 'lfemurX'" in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_main_restores_process_state(monkeypatch, capsys):
+    """Warnings format and BLAS thread variables are the command's, not the session's."""
+    import warnings
+
+    from upm.cli import main
+
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(name, raising=False)
+    before = warnings.formatwarning
+    assert main(["clips", "--json"]) == 0
+    capsys.readouterr()
+    assert warnings.formatwarning is before
+    assert os.environ.get("OMP_NUM_THREADS") is None
+
+
+def test_closed_pipe_is_a_quiet_exit(monkeypatch, capsys):
+    class ClosedPipe:
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", ClosedPipe())
+    assert main(["clips"]) == 141
+    monkeypatch.undo()
+    assert capsys.readouterr().err == ""

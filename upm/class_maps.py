@@ -339,7 +339,7 @@ class ClassMaps:
 #: decompressed (a zip bomb is refused unread). A 2,000-neuron map is under 2 MB.
 MAX_MEMBERS = 64
 MAX_UNCOMPRESSED_BYTES = 1 << 30
-MAX_COMPRESSION_RATIO = 1000
+MAX_COMPRESSION_RATIO = 200
 #: What reading a damaged archive member can raise (zip, zlib, the .npy header).
 _ARCHIVE_ERRORS = (OSError, ValueError, EOFError, KeyError, TypeError, SyntaxError,
                    RuntimeError, NotImplementedError, OverflowError, zipfile.BadZipFile,

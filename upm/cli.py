@@ -13,6 +13,7 @@ prints one line on stderr and exits 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import sys
 import warnings
@@ -66,35 +67,64 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _limit_blas_threads() -> None:
-    """One BLAS thread, unless the user chose a number (OMP/OPENBLAS/MKL_NUM_THREADS).
+_BLAS_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
-    The arrays here are small (a window of 20-40 frames x 63 DOFs): a multi-threaded BLAS
-    only adds contention; the spacetime optimisation ran 2-30x slower with it on a loaded
-    2-core machine.
+
+@contextlib.contextmanager
+def _command_environment():
+    """The process-wide settings of one command's run, restored when it ends.
+
+    - Warnings print as one line (``upm: warning: ...``).
+    - One BLAS thread, unless the user chose a number (OMP/OPENBLAS/MKL_NUM_THREADS).
+      The arrays here are small (a window of 20-40 frames x 63 DOFs): a multi-threaded
+      BLAS only adds contention; the spacetime optimisation ran 2-30x slower with it on a
+      loaded 2-core machine. Libraries loaded later (scipy's own OpenBLAS, worker
+      processes) read the variables; the ones already loaded (numpy's) are limited
+      through threadpoolctl.
+
+    Tests call :func:`main` in-process, so nothing here may outlive the command.
     """
     import os
 
-    names = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-    if any(os.environ.get(v) for v in names):
-        return
-    # Libraries loaded later (scipy's own OpenBLAS, worker processes) read the variables;
-    # the ones already loaded (numpy's) are limited through threadpoolctl.
-    for v in names:
-        os.environ[v] = "1"
-    from threadpoolctl import threadpool_limits
+    saved_format = warnings.formatwarning
+    saved_env = {v: os.environ.get(v) for v in _BLAS_THREAD_VARIABLES}
+    user_chose = any(saved_env.values())
+    warnings.formatwarning = _one_line_warning
+    try:
+        if user_chose:
+            yield
+            return
+        for v in _BLAS_THREAD_VARIABLES:
+            os.environ[v] = "1"
+        from threadpoolctl import threadpool_limits
 
-    threadpool_limits(1, user_api="blas")
+        with threadpool_limits(1, user_api="blas"):
+            yield
+    finally:
+        warnings.formatwarning = saved_format
+        for v, value in saved_env.items():
+            if value is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = value
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
-    warnings.formatwarning = _one_line_warning
-    _limit_blas_threads()
+    """Run the command line; returns the exit code.
+
+    Exit codes: 0 success, 2 bad input (one line on stderr), 130 interrupted, 141 when
+    the reader of stdout went away (``upm clips | head``: no message).
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args._run(args) or 0)
+        with _command_environment():
+            code = int(args._run(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+        return code
+    except BrokenPipeError:
+        _silence_stdout()
+        return 141
     except UpmError as exc:
         print(f"upm {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -105,6 +135,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"upm {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _silence_stdout() -> None:
+    """After a closed pipe: point stdout at /dev/null so the interpreter's final flush
+    does not raise again (the recipe of Python's ``signal`` documentation)."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # stdout replaced, or no descriptor
+        pass
 
 
 if __name__ == "__main__":

@@ -7,11 +7,12 @@ import sys
 
 
 def add_data_argument(parser) -> None:
-    """``--data DIR``: the clips' directory (default ``$UPM_DATA``)."""
+    """``--data DIR``: the clips' directory (:func:`upm.catalog.default_data_dir`)."""
     parser.add_argument(
         "--data", metavar="DIR", default=None,
         help="directory of CMU clips (NN/NN.asf, NN/NN_MM.amc, clips.csv); "
-        "default: $UPM_DATA",
+        "default: $UPM_DATA, else shared/data/cmu beside the checkout (../shared/data/cmu "
+        "from the repository root)",
     )
 
 

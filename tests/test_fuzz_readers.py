@@ -1,0 +1,224 @@
+"""Seeded mutation tests of the readers: ASF, AMC, clips.csv and saved maps.
+
+Each case mutates a real file (read from the data directory at run time, written to
+``tmp_path``) and reads it the way the command line does. The outcome must be a clean
+result (finite numbers) or one :class:`DataFileError` naming the mutated file: never
+another exception, never a message blaming another file.
+"""
+
+from __future__ import annotations
+
+import random
+import warnings
+
+import numpy as np
+import pytest
+
+from tests.fuzz_mutations import ASF_MUTATORS, CSV_MUTATORS, mutate, mutate_npz, zip_bomb
+from upm.errors import DataFileError
+
+N_CASES = 300
+
+
+def _assert_names(exc: DataFileError, path) -> None:
+    assert exc.path == str(path), f"error blames {exc.path}, not {path}: {exc}"
+    assert "\n" not in str(exc)
+
+
+@pytest.fixture(scope="module")
+def asf_bytes(data_dir):
+    return (data_dir / "02" / "02.asf").read_bytes()
+
+
+@pytest.fixture(scope="module")
+def amc_bytes(data_dir):
+    """The first 12 frames of 02_01 (a short but real AMC)."""
+    lines = (data_dir / "02" / "02_01.amc").read_bytes().split(b"\n")
+    starts = [i for i, line in enumerate(lines) if line.strip() == b"13"]
+    assert lines.count(b"2\r") + lines.count(b"2") == 1
+    return b"\n".join(lines[:starts[0]]) + b"\n"
+
+
+def test_mutated_asf_is_read_or_refused_naming_it(tmp_path, asf_bytes):
+    from humanoid_xml.validate import check_skeleton
+    from upm.asf import read_asf
+
+    rng = random.Random(15)
+    outcomes = {"read": 0, "refused": 0}
+    for case in range(N_CASES):
+        path = tmp_path / f"case{case}.asf"
+        path.write_bytes(mutate(asf_bytes, rng, ASF_MUTATORS))
+        try:
+            skeleton = read_asf(path)
+            check_skeleton(skeleton)
+        except DataFileError as exc:
+            _assert_names(exc, path)
+            outcomes["refused"] += 1
+            continue
+        assert np.all(np.isfinite(skeleton.lengths_m)) and np.all(skeleton.lengths_m < 100)
+        outcomes["read"] += 1
+    assert outcomes["refused"] > N_CASES // 3 and outcomes["read"] > 10, outcomes
+
+
+def test_mutated_asf_builds_a_humanoid_or_names_the_asf(tmp_path, asf_bytes):
+    """The model path the commands share: MuJoCo's refusals name the ASF, one line."""
+    from humanoid_xml import subject_model_path
+
+    rng = random.Random(1515)
+    built = 0
+    for case in range(12):
+        path = tmp_path / f"case{case}.asf"
+        path.write_bytes(mutate(asf_bytes, rng, ASF_MUTATORS[-2:] + ASF_MUTATORS[2:4]))
+        try:
+            subject_model_path(path)
+            built += 1
+        except DataFileError as exc:
+            _assert_names(exc, path)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("dof rx ry rz", "no joint strength"),
+    ("length 0", "m long"),
+])
+def test_humanoid_refuses_a_degenerate_hand_naming_the_asf_line(tmp_path, asf_bytes, text,
+                                                                  message):
+    from humanoid_xml import build_mjcf
+    from upm.asf import read_asf
+
+    lines = asf_bytes.decode().splitlines()
+    begin = next(i for i, line in enumerate(lines) if line.strip() == "name rhand") - 2
+    end = next(i for i in range(begin, len(lines)) if lines[i].strip() == "end")
+    key = text.split()[0]
+    at = next(i for i in range(begin, end) if lines[i].split()[:1] == [key])
+    lines[at] = "    " + text
+    if key == "dof":  # a third limits pair for the third dof
+        limits = next(i for i in range(begin, end) if lines[i].split()[:1] == ["limits"])
+        lines.insert(limits + 1, "        (-10 10)")
+    path = tmp_path / "02.asf"
+    path.write_text("\n".join(lines))
+    with pytest.raises(DataFileError, match=message) as info:
+        build_mjcf(read_asf(path))
+    assert info.value.path == str(path) and info.value.line == begin + 1  # its "begin"
+
+
+def test_mutated_amc_is_read_or_refused_naming_it(tmp_path, catalog, amc_bytes):
+    from upm.amc import read_amc
+
+    skeleton = catalog.skeleton("02")
+    rng = random.Random(150)
+    outcomes = {"read": 0, "refused": 0}
+    for case in range(N_CASES):
+        path = tmp_path / f"case{case}.amc"
+        path.write_bytes(mutate(amc_bytes, rng))
+        try:
+            motion = read_amc(path, skeleton)
+        except DataFileError as exc:
+            _assert_names(exc, path)
+            outcomes["refused"] += 1
+            continue
+        assert np.all(np.isfinite(motion.posture_deg)) and np.all(np.isfinite(motion.root))
+        assert np.all(np.abs(motion.posture_deg) <= 1e6)
+        outcomes["read"] += 1
+    assert outcomes["refused"] > N_CASES // 3 and outcomes["read"] > 10, outcomes
+
+
+@pytest.mark.parametrize("number", ["\u00b2", "\u00b9", "9" * 5000, "1234567890"])
+def test_amc_frame_numbers_are_short_ascii_digits(tmp_path, catalog, amc_bytes, number):
+    from upm.amc import read_amc
+
+    path = tmp_path / "bad.amc"
+    lines = amc_bytes.splitlines()
+    at = lines.index(b"2")
+    lines[at] = number.encode()
+    path.write_bytes(b"\n".join(lines))
+    with pytest.raises(DataFileError) as info:
+        read_amc(path, catalog.skeleton("02"))
+    _assert_names(info.value, path)
+
+
+def test_mutated_clips_csv_is_read_or_refused_naming_it(tmp_path, data_dir):
+    from upm.catalog import Catalog
+
+    source = (data_dir / "clips.csv").read_bytes().split(b"\n")
+    csv_bytes = b"\n".join(source[:12]) + b"\n"
+    (tmp_path / "02").mkdir()
+    (tmp_path / "02" / "02_01.amc").write_bytes(b"1\n")  # the catalogue does not read it
+    rng = random.Random(1500)
+    outcomes = {"read": 0, "refused": 0}
+    path = tmp_path / "clips.csv"
+    for _ in range(N_CASES):
+        path.write_bytes(mutate(csv_bytes, rng, CSV_MUTATORS))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                catalog = Catalog(tmp_path)
+        except DataFileError as exc:
+            _assert_names(exc, path)
+            outcomes["refused"] += 1
+            continue
+        assert all(0 < info.fps <= 10000 for info in catalog)
+        outcomes["read"] += 1
+    assert outcomes["refused"] > N_CASES // 4 and outcomes["read"] > 10, outcomes
+
+
+@pytest.fixture(scope="module")
+def map_bytes(tmp_path_factory, catalog):
+    from upm.posture_map import UniformPostureMap
+
+    x = catalog.load("02_01").posture_deg[::20]
+    path = tmp_path_factory.mktemp("map") / "map.npz"
+    UniformPostureMap(radius_deg=40.0, passes=1, seed=0).fit(x, clip_names=["02_01"]).save(path)
+    return path.read_bytes()
+
+
+def test_mutated_map_is_loaded_or_refused_naming_it(tmp_path, map_bytes):
+    from upm.commands.train import summary_rows
+    from upm.posture_map import load_map
+
+    rng = random.Random(15000)
+    outcomes = {"loaded": 0, "refused": 0}
+    for case in range(N_CASES):
+        path = tmp_path / f"case{case}.npz"
+        path.write_bytes(mutate_npz(map_bytes, rng))
+        try:
+            posture_map = load_map(path)
+        except DataFileError as exc:
+            _assert_names(exc, path)
+            outcomes["refused"] += 1
+            continue
+        summary_rows(posture_map)  # what map-info and train print
+        outcomes["loaded"] += 1
+    assert outcomes["refused"] > N_CASES // 2, outcomes
+
+
+def test_a_zip_bomb_map_is_refused_unread(tmp_path, map_bytes):
+    from upm.posture_map import load_map
+
+    path = tmp_path / "bomb.npz"
+    path.write_bytes(zip_bomb(map_bytes, megabytes=64))
+    with pytest.raises(DataFileError, match="zip bomb") as info:
+        load_map(path)
+    _assert_names(info.value, path)
+
+
+def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
+    import io
+    import zipfile
+
+    from upm.posture_map import load_map
+
+    class Boom:
+        def __reduce__(self):
+            return (exec, ("raise SystemExit('unpickled')",))
+
+    buffer = io.BytesIO()
+    np.lib.format.write_array(buffer, np.array([Boom()], dtype=object), allow_pickle=True)
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(map_bytes)) as src, zipfile.ZipFile(out, "w") as dst:
+        for info in src.infolist():
+            data = buffer.getvalue() if info.filename == "neurons_body.npy" else src.read(info)
+            dst.writestr(info.filename, data)
+    path = tmp_path / "pickled.npz"
+    path.write_bytes(out.getvalue())
+    with pytest.raises(DataFileError, match="never unpickled"):
+        load_map(path)
