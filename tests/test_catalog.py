@@ -2,6 +2,8 @@
 
 import warnings
 
+import numpy as np
+
 import pytest
 
 from upm.catalog import Catalog, ClipRef, parse_clip_ref
@@ -68,3 +70,22 @@ def test_missing_data_dir(tmp_path):
         Catalog(tmp_path / "nowhere")
     with pytest.raises(UsageError, match="no clips"):
         Catalog(tmp_path)
+
+
+@pytest.mark.parametrize("ref, message", [
+    ("02_01@200:100", "empty range \\(frame 200 is not before frame 100"),
+    ("02_01@-3:-5", "empty range"),
+    ("02_01@5:5", "empty range"),
+    ("02_01@999999", "out of range"),
+])
+def test_reversed_and_out_of_range_frames_are_told_apart(catalog, ref, message):
+    with pytest.raises(UsageError, match=message):
+        catalog.load_ref(ref)
+
+
+def test_negative_frames_count_from_the_end(catalog):
+    motion = catalog.load("02_01")
+    last3 = catalog.load_ref("02_01@-3:")
+    assert last3.n_frames == 3
+    assert np.array_equal(last3.posture_deg, motion.posture_deg[-3:])
+    assert np.array_equal(catalog.load_ref("02_01@-1").posture_deg, motion.posture_deg[-1:])

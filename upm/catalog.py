@@ -229,6 +229,9 @@ class Catalog:
         if stop is None:
             stop = n
         start, stop = (start + n if start < 0 else start), (stop + n if stop < 0 else stop)
+        if ref.has_range and 0 <= start < n and 0 <= stop <= n and start >= stop:
+            raise UsageError(f"{ref}: empty range (frame {start} is not before frame {stop}; "
+                             "CLIP@A:B is frames A to B-1, so A must come before B)")
         if not 0 <= start < stop <= n:
             raise UsageError(f"{ref}: frames out of range (clip {ref.name} has {n} frames, "
                              f"numbered 0 to {n - 1})")
