@@ -3,7 +3,6 @@
 import warnings
 
 import numpy as np
-
 import pytest
 
 from upm.catalog import Catalog, ClipRef, parse_clip_ref

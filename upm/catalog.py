@@ -225,10 +225,11 @@ class Catalog:
             return motion
         n = motion.n_frames
         start = ref.start if ref.start is not None else 0
+        start = start + n if start < 0 else start
         stop = ref.stop if ref.has_range else start + 1
         if stop is None:
             stop = n
-        start, stop = (start + n if start < 0 else start), (stop + n if stop < 0 else stop)
+        stop = stop + n if stop < 0 else stop
         if ref.has_range and 0 <= start < n and 0 <= stop <= n and start >= stop:
             raise UsageError(f"{ref}: empty range (frame {start} is not before frame {stop}; "
                              "CLIP@A:B is frames A to B-1, so A must come before B)")
