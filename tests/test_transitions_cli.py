@@ -79,7 +79,7 @@ def run(*args):
       "f.png", "--plot-dof", "knee.rx", "--out", "x.amc"], "not a posture DOF"),
     (["sequence", "02_01@0:100", "--method", "linear", "--out", "x.amc"], "at least two"),
     (["sequence", "02_01@0:100", "02_03@50:10", "--method", "linear", "--out", "x.amc"],
-     "out of range"),
+     "empty range"),
 ])
 def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     args = [a if a != "x.amc" else str(tmp_path / "x.amc") for a in args]
