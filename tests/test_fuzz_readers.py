@@ -222,3 +222,29 @@ def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
     path.write_bytes(out.getvalue())
     with pytest.raises(DataFileError, match="never unpickled"):
         load_map(path)
+
+
+def test_amc_is_read_in_memory_bounded_by_three_times_its_size(tmp_path, catalog, data_dir):
+    import tracemalloc
+
+    from upm.amc import read_amc
+
+    text = (data_dir / "02" / "02_01.amc").read_text()
+    header, _, body = text.partition("\n1\n")
+    frames = ("1\n" + body).split("\n")
+    starts = [i for i, line in enumerate(frames) if line.strip().isdigit()]
+    block = frames[starts[0]:starts[1]]
+    lines = [header]
+    for number in range(1, 3001):  # about 2.5 MB
+        lines += [str(number)] + block[1:]
+    path = tmp_path / "long.amc"
+    path.write_text("\n".join(lines) + "\n")
+    size = path.stat().st_size
+    tracemalloc.start()
+    try:
+        motion = read_amc(path, catalog.skeleton("02"))
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert motion.n_frames == 3000
+    assert peak <= 3 * size, f"peak {peak / size:.2f} x the file size"

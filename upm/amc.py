@@ -8,6 +8,7 @@ the default) or radians (``:RADIANS``); root translations are in ASF length unit
 
 from __future__ import annotations
 
+import array
 import math
 import os
 import re
@@ -18,12 +19,14 @@ from upm.errors import DataFileError
 from upm.fileio import atomic_open
 from upm.motion import Motion
 from upm.skeleton import JOINTS, ROOT_CHANNELS, Skeleton, joint_dof_index
-from upm.textfile import read_text_lines
+from upm.textfile import iter_text_lines
 
 #: Largest magnitude accepted for an AMC value (degrees, radians or ASF length units):
 #: far beyond any real motion, small enough that kinematics and dynamics stay finite.
 MAX_ABS_VALUE = 1e6
 _FRAME_NUMBER = re.compile(r"[0-9]{1,9}")
+#: Largest AMC file read (the longest CMU take is about 25 MB; 2 GB is 4.5 hours at 120 fps).
+MAX_AMC_BYTES = 2 * 1024 ** 3
 
 
 class ChannelLayout:
@@ -98,45 +101,54 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
     -------
     Motion
 
+    Notes
+    -----
+    The file is streamed: memory stays within about twice its size (values are kept
+    as 8-byte doubles), and files over 64 MB show a progress bar on a terminal.
+
     Raises
     ------
     DataFileError
         Naming file and line: unknown bone, a bone missing from a frame or given twice,
-        a wrong number of values, a non-numeric, NaN or infinite value or one beyond
+        a file over :data:`MAX_AMC_BYTES`, a wrong number of values, a non-numeric,
+        NaN or infinite value or one beyond
         :data:`MAX_ABS_VALUE`, a frame number that is not 1 to 9 ASCII digits, frame
         numbers out of order, a truncated last frame, no frames at all.
     """
-    lines = read_text_lines(path, "AMC")
     layout = ChannelLayout(skeleton)
     n_bones = len(layout.bones)
     by_name = layout.by_name
     asf_name = os.path.basename(skeleton.source)
 
     radians = False
-    rows: list[list[float]] = []
-    frame_lines: list[int] = []
-    row: list[float] | None = None
+    # Values go straight into a flat array of doubles (8 bytes a value, under the ~10
+    # bytes of its text), so a file is read in about its own size in memory.
+    values = array.array("d")
+    row = array.array("d", bytes(8 * layout.n_channels))
+    n_frames = 0
+    in_frame = False
     seen: set[str] = set()
     frame_number = None
     frame_line = 0
+    n_lines = 0
 
-    def close_frame(at_line: int) -> None:
+    def close_frame(at_line: int, at_end: bool = False) -> None:
         if len(seen) != n_bones:
             missing = [b for b, _, _ in layout.bones if b not in seen]
             raise DataFileError(
                 path, f"frame {frame_number} (line {frame_line}) lacks bone {missing[0]!r}"
                 f"{' and ' + str(len(missing) - 1) + ' more' if len(missing) > 1 else ''}"
-                f"{' (truncated file?)' if at_line > len(lines) else ''}", at_line)
-        rows.append(row)
-        frame_lines.append(frame_line)
+                f"{' (truncated file?)' if at_end else ''}", at_line)
+        values.extend(row)
 
-    for lineno, raw in enumerate(lines, start=1):
+    for lineno, raw in iter_text_lines(path, "AMC", max_bytes=MAX_AMC_BYTES):
+        n_lines = lineno
         parts = raw.split()
         if not parts or parts[0].startswith("#"):
             continue
         head = parts[0]
         if head.startswith(":"):
-            if row is not None:
+            if in_frame:
                 raise DataFileError(path, f"keyword {head} after the first frame", lineno)
             keyword = head.upper()
             if keyword == ":RADIANS":
@@ -146,16 +158,19 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
             continue
         if len(parts) == 1 and _FRAME_NUMBER.fullmatch(head):
             number = int(head)
-            if row is not None:
+            if in_frame:
                 close_frame(lineno)
+                n_frames += 1
                 if number != frame_number + 1:
                     raise DataFileError(path, f"frame {number} follows frame {frame_number} "
                                               f"(expected {frame_number + 1})", lineno)
             frame_number, frame_line = number, lineno
-            row = [0.0] * layout.n_channels
+            in_frame = True
+            for k in range(len(row)):
+                row[k] = 0.0
             seen = set()
             continue
-        if row is None:
+        if not in_frame:
             raise DataFileError(path, f"expected a frame number, found {raw.strip()[:40]!r}",
                                 lineno)
         entry = by_name.get(head)
@@ -163,8 +178,8 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
             if head in skeleton.bone_names:
                 raise DataFileError(path, f"bone {head!r} has values but no dofs in {asf_name} "
                                           "(does this AMC belong to another skeleton?)", lineno)
-            raise DataFileError(path, f"unknown bone {head!r} (not in {asf_name}: does this "
-                                      "AMC belong to another skeleton?)", lineno)
+            raise DataFileError(path, f"unknown bone {head[:40]!r} (not in {asf_name}: does "
+                                      "this AMC belong to another skeleton?)", lineno)
         if head in seen:
             raise DataFileError(path, f"bone {head!r} appears twice in frame {frame_number}",
                                 lineno)
@@ -174,38 +189,25 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
             raise DataFileError(path, f"bone {head!r} needs {count} values, found "
                                       f"{len(parts) - 1}", lineno)
         try:
-            row[column:column + count] = [float(v) for v in parts[1:]]
+            numbers = [float(v) for v in parts[1:]]
         except ValueError:
             raise DataFileError(path, f"non-numeric value for bone {head!r}: "
-                                      f"{' '.join(parts[1:])}", lineno) from None
-    if row is None:
+                                      f"{' '.join(parts[1:])[:80]}", lineno) from None
+        for k, v in enumerate(numbers):
+            if not math.isfinite(v):
+                raise DataFileError(path, f"NaN or infinite value for bone {head!r}", lineno)
+            if abs(v) > MAX_ABS_VALUE:
+                raise DataFileError(path, f"value {v:g} for bone {head!r} is beyond the "
+                                          f"accepted magnitude {MAX_ABS_VALUE:g}", lineno)
+            row[column + k] = v
+    if not in_frame:
         raise DataFileError(path, "no frames (an AMC needs frame-number lines with bone values)")
-    close_frame(len(lines) + 1)
+    close_frame(n_lines + 1, at_end=True)
+    n_frames += 1
 
-    values = np.array(rows, dtype=float)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        frame, column = np.argwhere(bad)[0]
-        bone = next(b for b, c, n in layout.bones if c <= column < c + n)
-        lineno = _find_bone_line(lines, frame_lines[frame], bone)
-        raise DataFileError(path, f"NaN or infinite value for bone {bone!r}", lineno)
-    huge = np.abs(values) > MAX_ABS_VALUE
-    if huge.any():
-        frame, column = np.argwhere(huge)[0]
-        bone = next(b for b, c, n in layout.bones if c <= column < c + n)
-        lineno = _find_bone_line(lines, frame_lines[frame], bone)
-        raise DataFileError(path, f"value {values[frame, column]:g} for bone {bone!r} is beyond "
-                                  f"the accepted magnitude {MAX_ABS_VALUE:g}", lineno)
+    table = np.frombuffer(values, dtype=float).reshape(n_frames, layout.n_channels)
     label = name if name is not None else os.path.splitext(os.path.basename(path))[0]
-    return _to_motion(skeleton, layout, values, fps, radians, label)
-
-
-def _find_bone_line(lines: list[str], start: int, bone: str) -> int:
-    for lineno in range(start + 1, len(lines) + 1):
-        parts = lines[lineno - 1].split()
-        if parts and parts[0] == bone:
-            return lineno
-    return start
+    return _to_motion(skeleton, layout, table, fps, radians, label)
 
 
 def motion_channels(motion: Motion) -> np.ndarray:
