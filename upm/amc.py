@@ -125,6 +125,7 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
     # bytes of its text), so a file is read in about its own size in memory.
     values = array.array("d")
     row = array.array("d", bytes(8 * layout.n_channels))
+    frame_lines = array.array("q")
     n_frames = 0
     in_frame = False
     seen: set[str] = set()
@@ -140,6 +141,7 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
                 f"{' and ' + str(len(missing) - 1) + ' more' if len(missing) > 1 else ''}"
                 f"{' (truncated file?)' if at_end else ''}", at_line)
         values.extend(row)
+        frame_lines.append(frame_line)
 
     for lineno, raw in iter_text_lines(path, "AMC", max_bytes=MAX_AMC_BYTES):
         n_lines = lineno
@@ -193,21 +195,37 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
         except ValueError:
             raise DataFileError(path, f"non-numeric value for bone {head!r}: "
                                       f"{' '.join(parts[1:])[:80]}", lineno) from None
-        for k, v in enumerate(numbers):
-            if not math.isfinite(v):
-                raise DataFileError(path, f"NaN or infinite value for bone {head!r}", lineno)
-            if abs(v) > MAX_ABS_VALUE:
-                raise DataFileError(path, f"value {v:g} for bone {head!r} is beyond the "
-                                          f"accepted magnitude {MAX_ABS_VALUE:g}", lineno)
-            row[column + k] = v
+        row[column:column + count] = array.array("d", numbers)
     if not in_frame:
         raise DataFileError(path, "no frames (an AMC needs frame-number lines with bone values)")
     close_frame(n_lines + 1, at_end=True)
     n_frames += 1
 
     table = np.frombuffer(values, dtype=float).reshape(n_frames, layout.n_channels)
+    _check_values(path, layout, table, frame_lines)
     label = name if name is not None else os.path.splitext(os.path.basename(path))[0]
     return _to_motion(skeleton, layout, table, fps, radians, label)
+
+
+def _check_values(path, layout: ChannelLayout, table: np.ndarray, frame_lines) -> None:
+    """Refuse a NaN, infinite or over-:data:`MAX_ABS_VALUE` value, naming its line."""
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(table) <= MAX_ABS_VALUE)
+    if not bad.any():
+        return
+    frame, column = np.argwhere(bad)[0]
+    value = table[frame, column]
+    bone = next(b for b, c, n in layout.bones if c <= column < c + n)
+    lineno = frame_lines[frame]
+    for number, line in iter_text_lines(path, "AMC"):
+        parts = line.split()
+        if number > frame_lines[frame] and parts and parts[0] == bone:
+            lineno = number
+            break
+    if not np.isfinite(value):
+        raise DataFileError(path, f"NaN or infinite value for bone {bone!r}", lineno)
+    raise DataFileError(path, f"value {value:g} for bone {bone!r} is beyond the accepted "
+                              f"magnitude {MAX_ABS_VALUE:g}", lineno)
 
 
 def motion_channels(motion: Motion) -> np.ndarray:

@@ -46,9 +46,9 @@ def iter_text_lines(path: str | os.PathLike, kind: str, max_bytes: int | None = 
                     progress_bytes: int = 64 * 1024 * 1024):
     """Yield ``(line number, line)`` of a text file without holding it in memory.
 
-    Same checks as :func:`read_text_lines` (missing, unreadable, empty, binary; UTF-8
-    else Latin-1 per line), plus a size limit; a progress bar by bytes for files over
-    ``progress_bytes``.
+    Same checks as :func:`read_text_lines` (missing, unreadable, empty, binary: a NUL
+    byte in the first 64 KiB; UTF-8 else Latin-1 per line), plus a size limit; a
+    progress bar by bytes for files over ``progress_bytes``.
 
     Raises
     ------
@@ -76,17 +76,19 @@ def iter_text_lines(path: str | os.PathLike, kind: str, max_bytes: int | None = 
         bar = progress(total=size, unit="B", unit_scale=True, desc=os.path.basename(path),
                        disable=None if size > progress_bytes else True)
         any_text = False
+        done = 0
         with bar:
             for lineno, raw in enumerate(_split_lines(handle), start=1):
-                bar.update(len(raw))
-                if b"\x00" in raw:
-                    raise DataFileError(path, f"binary data, not a text {kind} file", lineno)
+                if lineno % 65536 == 0:
+                    bar.update(handle.tell() - done)
+                    done = handle.tell()
+                if not any_text and raw.strip():
+                    any_text = True
                 try:
-                    line = raw.decode("utf-8")
+                    yield lineno, raw.decode("utf-8")
                 except UnicodeDecodeError:
-                    line = raw.decode("latin-1")
-                any_text = any_text or bool(line.strip())
-                yield lineno, line.rstrip("\r\n")
+                    yield lineno, raw.decode("latin-1")
+            bar.update(size - done)
         if not any_text:
             raise DataFileError(path, f"empty {kind} file")
 
