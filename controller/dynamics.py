@@ -242,16 +242,29 @@ def root_residual(model, qpos, fps: float, support_distance_m: float = SUPPORT_D
     Returns
     -------
     RootResidual
+
+    Raises
+    ------
+    UsageError
+        If ``qpos`` or the wrench it needs is not finite (a motion whose values are far
+        beyond any physical range): never a silent NaN or a solver traceback.
     """
     from scipy.optimize import nnls
 
     from controller.body import body_figures
+    from upm.errors import UsageError
 
+    if not np.all(np.isfinite(qpos)) or not np.isfinite(fps) or fps <= 0:
+        raise UsageError("root residual: the trajectory holds NaN or infinite positions "
+                         "(or the frame rate is not a positive number)")
     figures = body_figures(model)
     qpos = (unwrap_hinges(model, qpos) if lowpass_hz is None
             else lowpass_qpos(model, qpos, fps, lowpass_hz))
     qvel, qacc = finite_differences(model, qpos, fps)
     needed, contacts = _needed_and_contacts(model, qpos, qvel, qacc, support_distance_m)
+    if not np.all(np.isfinite(needed)):
+        raise UsageError("root residual: the motion's accelerations overflow (values far "
+                         "beyond any physical range)")
     frame, pos, normal, t1, t2 = contacts
     n = qpos.shape[0]
     # Everything in the world frame from here: the root force is world-frame already,

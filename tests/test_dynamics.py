@@ -150,3 +150,19 @@ def test_lowpass_keeps_quaternions_unit_and_hemisphere_flips_harmless(model02, w
     np.testing.assert_allclose(np.linalg.norm(a[:, 3:7], axis=1), 1.0)
     np.testing.assert_allclose(np.abs(np.sum(a[:, 3:7] * b[:, 3:7], axis=1)), 1.0, atol=1e-9)
     assert np.abs(a[:, :3] - qpos[:, :3]).max() < 0.02  # a walk's root moves little above 12 Hz
+
+
+def test_root_residual_refuses_non_finite_motion(model02):
+    import pytest
+
+    from controller.dynamics import root_residual
+    from upm.errors import UsageError
+
+    qpos = np.tile(model02.qpos0, (5, 1))
+    qpos[2, 7] = np.inf
+    with pytest.raises(UsageError, match="NaN or infinite"):
+        root_residual(model02, qpos, fps=120.0)
+    qpos[2, 7] = 0.0
+    qpos[2, 0] = 1e300  # a finite root position whose accelerations overflow
+    with pytest.raises(UsageError, match="overflow|NaN or infinite"):
+        root_residual(model02, qpos, fps=120.0)
