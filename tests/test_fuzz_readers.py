@@ -248,3 +248,22 @@ def test_amc_is_read_in_memory_bounded_by_three_times_its_size(tmp_path, catalog
         tracemalloc.stop()
     assert motion.n_frames == 3000
     assert peak <= 3 * size, f"peak {peak / size:.2f} x the file size"
+
+
+def test_model_command_names_a_degenerate_asf(tmp_path, asf_bytes):
+    """`upm model --asf` with a zero-length bone: one line naming the ASF, exit 2."""
+    import subprocess
+    import sys
+
+    lines = asf_bytes.decode().splitlines()
+    hand = next(i for i, line in enumerate(lines) if line.strip() == "name rhand")
+    at = next(i for i in range(hand, len(lines)) if lines[i].strip().startswith("length"))
+    lines[at] = "     length 0"
+    path = tmp_path / "my skeleton ñ.asf"
+    path.write_text("\n".join(lines))
+    result = subprocess.run([sys.executable, "-m", "upm", "model", "--asf", str(path),
+                             "--out", str(tmp_path / "m.xml")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert len(result.stderr.strip().splitlines()) == 1 and str(path) in result.stderr
+    assert "'rhand' is 0 m long" in result.stderr
+    assert not (tmp_path / "m.xml").exists()
