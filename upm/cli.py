@@ -51,8 +51,11 @@ def build_parser() -> argparse.ArgumentParser:
         prog="upm",
         description="Uniform Posture Map motion transitions (Lee & Chung 2001) on CMU motion "
         "capture, checked for physical validity on a MuJoCo humanoid.",
-        epilog="Data: --data DIR, default $UPM_DATA (the CMU clips, e.g. ../shared/data/cmu). "
-        "A CLIP is a name such as 02_01; CLIP@F is frame F (0-based), CLIP@A:B frames A to B-1.",
+        epilog="Data: --data DIR, default $UPM_DATA, else shared/data/cmu beside the checkout "
+        "(the CMU clips). A CLIP is a name such as 02_01; CLIP@F is frame F (0-based), "
+        "CLIP@A:B frames A to B-1 (either end may be left out); in every command a negative "
+        "frame counts from the end (CLIP@-1 is the last frame, CLIP@-60: the last 60). A clip "
+        "without a frame rate in clips.csv is read at 120 fps with a warning.",
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subparsers.required = True
