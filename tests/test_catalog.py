@@ -88,3 +88,31 @@ def test_negative_frames_count_from_the_end(catalog):
     assert last3.n_frames == 3
     assert np.array_equal(last3.posture_deg, motion.posture_deg[-3:])
     assert np.array_equal(catalog.load_ref("02_01@-1").posture_deg, motion.posture_deg[-1:])
+
+
+def test_no_clips_csv_is_one_warning_never_a_silent_rate(tmp_path, data_dir):
+    (tmp_path / "02").mkdir()
+    for name in ("02.asf", "02_03.amc", "02_01.amc"):
+        (tmp_path / "02" / name).write_bytes((data_dir / "02" / name).read_bytes())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        catalog = Catalog(tmp_path)
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 1, messages
+    assert "no clips.csv" in messages[0] and "its 2 clips are read at 120 fps" in messages[0]
+    assert all(info.fps == 120 for info in catalog)
+
+
+@pytest.mark.parametrize("row, message", [
+    ("02_03,inf", "outside"), ("02_03,nan", "outside"), ("02_03,0", "outside"),
+    ("02_03", "columns"), (",120", "without a clip name"), ("02_03,1e400", "outside"),
+])
+def test_bad_clips_csv_rows_name_the_line(tmp_path, data_dir, row, message):
+    from upm.errors import DataFileError
+
+    (tmp_path / "02").mkdir()
+    (tmp_path / "02" / "02_03.amc").write_bytes(b"1\n")
+    (tmp_path / "clips.csv").write_text(f"clip,fps\n02_01,120\n{row}\n")
+    with pytest.raises(DataFileError, match=message) as info:
+        Catalog(tmp_path)
+    assert info.value.path == str(tmp_path / "clips.csv") and info.value.line == 3
