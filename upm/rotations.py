@@ -179,10 +179,37 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     return np.unwrap(chained, period=360.0, axis=0)[1:]
 
 
+def _shepperd_coefficients() -> np.ndarray:
+    """(10, 16): ``[1, m00, m01, ..., m22] @ C`` gives Shepperd's four candidate rows
+    (each 4 components, flattened) of :func:`matrix_to_quaternion`."""
+    c = np.zeros((10, 4, 4))
+
+    def entry(i, j):
+        return 1 + 3 * i + j
+
+    signs = ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))
+    for row, (s0, s1, s2) in enumerate(signs):  # the diagonal entry of candidate row
+        c[0, row, row] = 1.0
+        c[entry(0, 0), row, row], c[entry(1, 1), row, row], c[entry(2, 2), row, row] = s0, s1, s2
+    # Off-diagonal entries: (row, col) -> (a, b, sign): m[a] + sign * m[b].
+    pairs = {(0, 1): ((2, 1), (1, 2), -1), (0, 2): ((0, 2), (2, 0), -1),
+             (0, 3): ((1, 0), (0, 1), -1), (1, 2): ((0, 1), (1, 0), 1),
+             (1, 3): ((0, 2), (2, 0), 1), (2, 3): ((1, 2), (2, 1), 1)}
+    for (row, col), (a, b, sign) in pairs.items():
+        for r, k in ((row, col), (col, row)):
+            c[entry(*a), r, k] = 1.0
+            c[entry(*b), r, k] = sign
+    return c.reshape(10, 16)
+
+
+_SHEPPERD = _shepperd_coefficients()
+
+
 def matrix_to_quaternion(matrix) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` of rotation matrices, with ``w >= 0``.
 
-    Shepperd's method (the largest of the four diagonal combinations), vectorised.
+    Shepperd's method (the largest of the four diagonal combinations), vectorised: the
+    four candidate rows are one linear map of the matrix entries.
 
     Parameters
     ----------
@@ -193,23 +220,15 @@ def matrix_to_quaternion(matrix) -> np.ndarray:
     ndarray, shape (..., 4)
     """
     m = np.asarray(matrix, dtype=float)
-    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
-    candidates = np.stack([
-        np.stack([1 + m00 + m11 + m22, m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
-                  m[..., 1, 0] - m[..., 0, 1]], axis=-1),
-        np.stack([m[..., 2, 1] - m[..., 1, 2], 1 + m00 - m11 - m22, m[..., 0, 1] + m[..., 1, 0],
-                  m[..., 0, 2] + m[..., 2, 0]], axis=-1),
-        np.stack([m[..., 0, 2] - m[..., 2, 0], m[..., 0, 1] + m[..., 1, 0], 1 - m00 + m11 - m22,
-                  m[..., 1, 2] + m[..., 2, 1]], axis=-1),
-        np.stack([m[..., 1, 0] - m[..., 0, 1], m[..., 0, 2] + m[..., 2, 0],
-                  m[..., 1, 2] + m[..., 2, 1], 1 - m00 - m11 + m22], axis=-1),
-    ], axis=-2)  # (..., 4 candidates, 4): candidate i has component i = 4 q_i^2 / ...
-    diagonal = np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22,
-                         1 - m00 - m11 + m22], axis=-1)
-    best = np.argmax(diagonal, axis=-1)
-    q = np.take_along_axis(candidates, best[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0, -q, q)
+    shape = m.shape[:-2]
+    flat = m.reshape(-1, 9)
+    candidates = (flat @ _SHEPPERD[1:] + _SHEPPERD[0]).reshape(-1, 4, 4)
+    rows = np.arange(len(flat))
+    best = np.argmax(candidates[:, (0, 1, 2, 3), (0, 1, 2, 3)], axis=1)
+    q = candidates[rows, best]
+    q /= np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
+    q[q[:, 0] < 0] *= -1.0
+    return q.reshape(shape + (4,))
 
 
 def rotation_log(matrix) -> np.ndarray:
