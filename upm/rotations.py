@@ -78,6 +78,10 @@ def _alternate_euler(angles_deg: np.ndarray, order: str) -> np.ndarray:
     return alt
 
 
+#: Below this cosine of the middle angle, a rotation is taken as in gimbal lock.
+_GIMBAL_LOCK_COS = 1e-12
+
+
 def _nearest_turn(angles_deg: np.ndarray, near_deg: np.ndarray) -> np.ndarray:
     """Shift each angle by whole turns to lie within 180 degrees of ``near_deg``."""
     return angles_deg + 360.0 * np.round((near_deg - angles_deg) / 360.0)
@@ -105,21 +109,26 @@ def matrix_to_euler_deg(matrix, order: str = "XYZ", near_deg=None) -> np.ndarray
         Angles about X, Y, Z in degrees, whatever the order. At gimbal lock (middle angle
         +-90) the first and last angles are not unique; one valid pair is returned.
     """
-    import warnings
-
-    from scipy.spatial.transform import Rotation
-
     m = np.asarray(matrix, dtype=float)
     if sorted(order) != ["X", "Y", "Z"]:
         raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
     shape = m.shape[:-2]
     flat = m.reshape(-1, 3, 3)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # scipy's gimbal-lock warning
-        in_sequence = Rotation.from_matrix(flat).as_euler(order.lower(), degrees=True)
-    angles = np.empty_like(in_sequence)
-    for k, axis in enumerate(order):
-        angles[:, _AXIS_INDEX[axis]] = in_sequence[:, k]
+    # R = R_k(last) R_j(middle) R_i(first) for order (i, j, k); e = +1 for cyclic orders.
+    i, j, k = (_AXIS_INDEX[axis] for axis in order)
+    e = 1.0 if (j - i) % 3 == 1 else -1.0
+    cos_middle = np.hypot(flat[:, i, i], flat[:, j, i])
+    middle = np.arctan2(-e * flat[:, k, i], cos_middle)
+    first = np.arctan2(e * flat[:, k, j], flat[:, k, k])
+    last = np.arctan2(e * flat[:, j, i], flat[:, i, i])
+    locked = cos_middle < _GIMBAL_LOCK_COS
+    if locked.any():
+        # Only first + last (or first - last) is defined: take last = 0.
+        first[locked] = np.arctan2(-e * flat[locked, j, k], flat[locked, j, j])
+        last[locked] = 0.0
+    angles = np.empty(flat.shape[:1] + (3,))
+    angles[:, i], angles[:, j], angles[:, k] = first, middle, last
+    np.degrees(angles, out=angles)
     angles = angles.reshape(shape + (3,))
     if near_deg is None:
         return angles
