@@ -49,11 +49,13 @@ def timeit_best(fn: Callable[[], object], repeat: int = 5, number: int = 1) -> f
 
 
 def timeit_interleaved(fn: Callable[[], object], reference: Callable[[], object],
-                       rounds: int = 7, number: int = 1) -> dict[str, float]:
+                       rounds: int = 7, number: int = 1,
+                       warmup: bool = True) -> dict[str, float]:
     """Time ``fn`` and its ``reference`` in alternating rounds; medians.
 
     Each round times ``number`` calls of ``fn`` then ``number`` calls of ``reference``
-    (the order flips every round), so a change of machine load hits both alike.
+    (the order flips every round), so a change of machine load hits both alike. With
+    ``warmup`` each runs once untimed first.
 
     Returns
     -------
@@ -68,8 +70,9 @@ def timeit_interleaved(fn: Callable[[], object], reference: Callable[[], object]
             f()
         return (time.perf_counter() - start) / number
 
-    fn()
-    reference()  # warm caches and lazy builds outside the timing
+    if warmup:  # caches and lazy builds outside the timing
+        fn()
+        reference()
     own, ref = [], []
     for i in range(rounds):
         if i % 2:

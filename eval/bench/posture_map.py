@@ -1,4 +1,5 @@
-"""Posture maps: UPM training time on the train split, neurons per class, and the
+"""Posture maps: UPM training time on the train split (four classes in parallel, against
+the same training in order, interleaved), neurons per class, and the
 key-posture query per call (single and batched), next to a plain cKDTree query on the
 same neurons (raw degrees, no wrap-around, no interpolation, k = 1) as the same-run
 reference, timed interleaved with it.
@@ -6,6 +7,7 @@ reference, timed interleaved with it.
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -29,14 +31,28 @@ def run(context: BenchContext) -> dict:
     if context.quick:
         names = ["02_02", "09_06", "35_01"]
     x, names = postures_of_clips(catalog, names)
-    start = time.perf_counter()
-    upm = UniformPostureMap().fit(x, clip_names=names)
-    train_s = time.perf_counter() - start
+    # Training: the four classes in parallel (every usable CPU), interleaved with the
+    # same training in order in one process (the reference; identical neurons).
+    fitted = {}
+
+    def train(workers):
+        fitted[workers] = UniformPostureMap(workers=workers).fit(x, clip_names=names)
+
+    training = timeit_interleaved(lambda: train(None), lambda: train(1),
+                                  rounds=1 if context.quick else 3, warmup=False)
+    upm = fitted[None]
+    train_s = training["s"]
     report = {
         "clips": len(names),
         "frames": len(x),
         "upm_train_s": train_s,
         "upm_train_us_per_frame": 1e6 * train_s / len(x),
+        "upm_train_workers": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+        else 1,
+        "reference_upm_train_in_order_s": training["reference_s"],
+        "upm_train_ratio_to_in_order": training["ratio"],
+        "upm_train_identical_neurons": all(
+            np.array_equal(upm.neurons[c], fitted[1].neurons[c]) for c in CLASS_NAMES),
         "classes": {c: {"neurons": len(upm.neurons[c]),
                         "radius_deg": upm.radius_deg[c],
                         "quantisation_error_mean_deg": upm.stats[c]["quantisation_error_mean_deg"],
