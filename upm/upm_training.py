@@ -412,7 +412,11 @@ def train_upm_classes(jobs: dict[str, tuple], workers: int | None = None,
 
     if workers is None:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    import multiprocessing
+
     workers = max(1, min(int(workers), len(jobs)))
+    if "fork" not in multiprocessing.get_all_start_methods():
+        workers = 1  # no fork (Windows): in order, same neurons
     names = list(jobs)
     with progress(total=len(names), desc=desc, unit="class",
                   disable=None if desc else True) as bar:
@@ -422,7 +426,6 @@ def train_upm_classes(jobs: dict[str, tuple], workers: int | None = None,
                 results[name] = _train_one(jobs[name])
                 bar.update(1)
             return results
-        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         # fork: the workers need no imports and share the samples copy-on-write.
