@@ -26,6 +26,17 @@ def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
     io = report["benchmarks"]["io"]
     assert io["frames"] > 0 and io["parse_us_per_frame"] > 0 and io["fk_us_per_frame"] > 0
     assert all(math.isfinite(x) for x in _numbers(report))
+    # BLAS pinned for the whole run; the interleaved figures carry their reference and
+    # a ratio inside the range of the per-round ratios.
+    assert report["blas_threads"] == [1]
+    maps = report["benchmarks"]["posture_map"]
+    assert maps["upm_train_identical_neurons"] is True
+    for kind in ("single", "batched"):
+        low, high = maps[f"key_posture_ratio_{kind}_range"]
+        assert low <= maps[f"key_posture_ratio_{kind}"] <= high
+        assert maps[f"reference_ckdtree_4_classes_us_{kind}"] > 0
+    methods = report["benchmarks"]["transitions"]["methods"]
+    assert methods["upm"]["ratio_to_reference"] > 0 and methods["linear"]["us_per_transition"] > 0
 
 
 def test_bench_unknown_name(data_dir, capsys):

@@ -240,6 +240,16 @@ def small_map(catalog):
     return UniformPostureMap().fit(x, clip_names=names), x
 
 
+def test_classes_trained_in_parallel_equal_trained_in_order(small_map):
+    parallel, x = small_map  # default workers: every usable CPU
+    in_order = UniformPostureMap(workers=1).fit(x)
+    two = UniformPostureMap(workers=2).fit(x)
+    for c in CLASS_NAMES:
+        assert np.array_equal(parallel.neurons[c], in_order.neurons[c])
+        assert np.array_equal(two.neurons[c], in_order.neurons[c])
+        assert parallel.stats[c]["births_per_pass"] == in_order.stats[c]["births_per_pass"]
+
+
 def _is_neuron(upm, posture):
     return all(np.any(np.all(upm.neurons[c] == posture[CLASS_SLICES[c]], axis=1))
                for c in CLASS_NAMES)

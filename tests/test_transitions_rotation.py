@@ -66,3 +66,22 @@ def test_quaternion_log_exp_agree_with_scipy():
     half_turns = np.array([np.diag([-1.0, 1.0, -1.0]), np.diag([1.0, -1.0, -1.0])])
     np.testing.assert_allclose(rotation_exp(rotation_log(half_turns)), half_turns, atol=1e-12)
     np.testing.assert_allclose(rotation_exp(np.zeros((2, 3))), np.eye(3)[None].repeat(2, 0))
+
+
+@pytest.mark.parametrize("order", ORDERS)
+def test_euler_is_the_principal_solution_scipy_gives(order):
+    # Closed form against scipy's intrinsic-from-extrinsic conversion: the same principal
+    # solution (middle angle in [-90, 90]) away from gimbal lock ...
+    rng = np.random.default_rng(3)
+    m = Rotation.random(500, random_state=rng).as_matrix()
+    ours = matrix_to_euler_deg(m, order)
+    theirs = Rotation.from_matrix(m).as_euler(order.lower(), degrees=True)
+    index = {"X": 0, "Y": 1, "Z": 2}
+    for k, axis in enumerate(order):
+        np.testing.assert_allclose(ours[:, index[axis]], theirs[:, k], atol=1e-8)
+    # ... and near and at it, angles that rebuild the rotation to float precision.
+    near = rng.uniform(-180, 180, (40, 3))
+    near[:, index[order[1]]] = 90.0 - np.concatenate([10.0 ** -np.arange(1, 13), np.zeros(28)])
+    m = euler_to_matrix(near, order)
+    np.testing.assert_allclose(euler_to_matrix(matrix_to_euler_deg(m, order), order), m,
+                               atol=1e-12)

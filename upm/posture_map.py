@@ -35,7 +35,7 @@ from upm.angular_search import AngularIndex
 from upm.class_maps import ClassMaps, load_map
 from upm.errors import DataFileError, UsageError
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
-from upm.upm_training import train_upm_class
+from upm.upm_training import train_upm_classes
 
 __all__ = ["UniformPostureMap", "default_radius_deg", "load_map"]
 
@@ -118,7 +118,10 @@ class UniformPostureMap(ClassMaps):
     shuffle : bool
         A new seeded sample order each pass (else the given order).
     progress : bool
-        A progress bar per class on stderr (when it is a terminal).
+        A progress bar over the classes on stderr (when it is a terminal).
+    workers : int, optional
+        Processes training the four classes at once (default: the usable CPUs; 1 trains
+        them in order). The neurons do not depend on it.
 
     Examples
     --------
@@ -130,7 +133,7 @@ class UniformPostureMap(ClassMaps):
 
     def __init__(self, radius_deg=None, neighbourhood_deg=None, learning_rate: float = 0.1,
                  passes: int = 5, batch_size: int = 512, seed: int = 0, shuffle: bool = True,
-                 progress: bool = False):
+                 progress: bool = False, workers: int | None = None):
         super().__init__()
         if not 0.0 < learning_rate < 1.0:
             raise UsageError(f"learning_rate must be in (0, 1), not {learning_rate}")
@@ -147,6 +150,7 @@ class UniformPostureMap(ClassMaps):
             "radius_deg": dict(self._radius), "neighbourhood_deg": dict(self._neighbourhood),
         }
         self.show_progress = progress
+        self.workers = workers
 
     @property
     def radius_deg(self) -> dict[str, float]:
@@ -168,18 +172,21 @@ class UniformPostureMap(ClassMaps):
         p = self.params
         start_s = time.perf_counter()
         neurons, class_stats = {}, {}
-        radius, neighbourhood = {}, {}
+        radius, neighbourhood, jobs = {}, {}, {}
         for c in CLASS_NAMES:
             sub = x[:, CLASS_SLICES[c]]
             radius[c] = (default_radius_deg(sub, seed=p["seed"]) if self._radius[c] is None
                          else self._radius[c])
             neighbourhood[c] = (radius[c] if self._neighbourhood[c] is None
                                 else self._neighbourhood[c])
-            result = train_upm_class(
-                sub, radius[c], neighbourhood[c], learning_rate=p["learning_rate"],
-                passes=p["passes"], batch_size=p["batch_size"], seed=p["seed"],
-                shuffle=p["shuffle"], desc=f"UPM {c}" if self.show_progress else None,
-            )
+            jobs[c] = (sub, radius[c], neighbourhood[c], {
+                "learning_rate": p["learning_rate"], "passes": p["passes"],
+                "batch_size": p["batch_size"], "seed": p["seed"], "shuffle": p["shuffle"]})
+        # The classes are independent: trained in parallel, identical neurons.
+        results = train_upm_classes(jobs, workers=self.workers,
+                                    desc="UPM classes" if self.show_progress else None)
+        for c in CLASS_NAMES:
+            result = results[c]
             neurons[c] = result.neurons_deg
             class_stats[c] = {"radius_deg": radius[c], "neighbourhood_deg": neighbourhood[c],
                               "births_per_pass": list(result.births_per_pass),

@@ -78,6 +78,10 @@ def _alternate_euler(angles_deg: np.ndarray, order: str) -> np.ndarray:
     return alt
 
 
+#: Below this cosine of the middle angle, a rotation is taken as in gimbal lock.
+_GIMBAL_LOCK_COS = 1e-12
+
+
 def _nearest_turn(angles_deg: np.ndarray, near_deg: np.ndarray) -> np.ndarray:
     """Shift each angle by whole turns to lie within 180 degrees of ``near_deg``."""
     return angles_deg + 360.0 * np.round((near_deg - angles_deg) / 360.0)
@@ -105,21 +109,26 @@ def matrix_to_euler_deg(matrix, order: str = "XYZ", near_deg=None) -> np.ndarray
         Angles about X, Y, Z in degrees, whatever the order. At gimbal lock (middle angle
         +-90) the first and last angles are not unique; one valid pair is returned.
     """
-    import warnings
-
-    from scipy.spatial.transform import Rotation
-
     m = np.asarray(matrix, dtype=float)
     if sorted(order) != ["X", "Y", "Z"]:
         raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
     shape = m.shape[:-2]
     flat = m.reshape(-1, 3, 3)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # scipy's gimbal-lock warning
-        in_sequence = Rotation.from_matrix(flat).as_euler(order.lower(), degrees=True)
-    angles = np.empty_like(in_sequence)
-    for k, axis in enumerate(order):
-        angles[:, _AXIS_INDEX[axis]] = in_sequence[:, k]
+    # R = R_k(last) R_j(middle) R_i(first) for order (i, j, k); e = +1 for cyclic orders.
+    i, j, k = (_AXIS_INDEX[axis] for axis in order)
+    e = 1.0 if (j - i) % 3 == 1 else -1.0
+    cos_middle = np.hypot(flat[:, i, i], flat[:, j, i])
+    middle = np.arctan2(-e * flat[:, k, i], cos_middle)
+    first = np.arctan2(e * flat[:, k, j], flat[:, k, k])
+    last = np.arctan2(e * flat[:, j, i], flat[:, i, i])
+    locked = cos_middle < _GIMBAL_LOCK_COS
+    if locked.any():
+        # Only first + last (or first - last) is defined: take last = 0.
+        first[locked] = np.arctan2(-e * flat[locked, j, k], flat[locked, j, j])
+        last[locked] = 0.0
+    angles = np.empty(flat.shape[:1] + (3,))
+    angles[:, i], angles[:, j], angles[:, k] = first, middle, last
+    np.degrees(angles, out=angles)
     angles = angles.reshape(shape + (3,))
     if near_deg is None:
         return angles
@@ -179,10 +188,37 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     return np.unwrap(chained, period=360.0, axis=0)[1:]
 
 
+def _shepperd_coefficients() -> np.ndarray:
+    """(10, 16): ``[1, m00, m01, ..., m22] @ C`` gives Shepperd's four candidate rows
+    (each 4 components, flattened) of :func:`matrix_to_quaternion`."""
+    c = np.zeros((10, 4, 4))
+
+    def entry(i, j):
+        return 1 + 3 * i + j
+
+    signs = ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))
+    for row, (s0, s1, s2) in enumerate(signs):  # the diagonal entry of candidate row
+        c[0, row, row] = 1.0
+        c[entry(0, 0), row, row], c[entry(1, 1), row, row], c[entry(2, 2), row, row] = s0, s1, s2
+    # Off-diagonal entries: (row, col) -> (a, b, sign): m[a] + sign * m[b].
+    pairs = {(0, 1): ((2, 1), (1, 2), -1), (0, 2): ((0, 2), (2, 0), -1),
+             (0, 3): ((1, 0), (0, 1), -1), (1, 2): ((0, 1), (1, 0), 1),
+             (1, 3): ((0, 2), (2, 0), 1), (2, 3): ((1, 2), (2, 1), 1)}
+    for (row, col), (a, b, sign) in pairs.items():
+        for r, k in ((row, col), (col, row)):
+            c[entry(*a), r, k] = 1.0
+            c[entry(*b), r, k] = sign
+    return c.reshape(10, 16)
+
+
+_SHEPPERD = _shepperd_coefficients()
+
+
 def matrix_to_quaternion(matrix) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` of rotation matrices, with ``w >= 0``.
 
-    Shepperd's method (the largest of the four diagonal combinations), vectorised.
+    Shepperd's method (the largest of the four diagonal combinations), vectorised: the
+    four candidate rows are one linear map of the matrix entries.
 
     Parameters
     ----------
@@ -193,23 +229,15 @@ def matrix_to_quaternion(matrix) -> np.ndarray:
     ndarray, shape (..., 4)
     """
     m = np.asarray(matrix, dtype=float)
-    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
-    candidates = np.stack([
-        np.stack([1 + m00 + m11 + m22, m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
-                  m[..., 1, 0] - m[..., 0, 1]], axis=-1),
-        np.stack([m[..., 2, 1] - m[..., 1, 2], 1 + m00 - m11 - m22, m[..., 0, 1] + m[..., 1, 0],
-                  m[..., 0, 2] + m[..., 2, 0]], axis=-1),
-        np.stack([m[..., 0, 2] - m[..., 2, 0], m[..., 0, 1] + m[..., 1, 0], 1 - m00 + m11 - m22,
-                  m[..., 1, 2] + m[..., 2, 1]], axis=-1),
-        np.stack([m[..., 1, 0] - m[..., 0, 1], m[..., 0, 2] + m[..., 2, 0],
-                  m[..., 1, 2] + m[..., 2, 1], 1 - m00 - m11 + m22], axis=-1),
-    ], axis=-2)  # (..., 4 candidates, 4): candidate i has component i = 4 q_i^2 / ...
-    diagonal = np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22,
-                         1 - m00 - m11 + m22], axis=-1)
-    best = np.argmax(diagonal, axis=-1)
-    q = np.take_along_axis(candidates, best[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0, -q, q)
+    shape = m.shape[:-2]
+    flat = m.reshape(-1, 9)
+    candidates = (flat @ _SHEPPERD[1:] + _SHEPPERD[0]).reshape(-1, 4, 4)
+    rows = np.arange(len(flat))
+    best = np.argmax(candidates[:, (0, 1, 2, 3), (0, 1, 2, 3)], axis=1)
+    q = candidates[rows, best]
+    q /= np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
+    q[q[:, 0] < 0] *= -1.0
+    return q.reshape(shape + (4,))
 
 
 def rotation_log(matrix) -> np.ndarray:

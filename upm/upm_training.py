@@ -378,3 +378,62 @@ def train_upm_class(samples_deg, radius_deg: float, neighbourhood_deg: float,
         births_per_pass=tuple(births),
         seconds=time.perf_counter() - start_s,
     )
+
+
+def _train_one(job: tuple) -> ClassTrainingResult:
+    samples, radius, neighbourhood, kwargs = job
+    return train_upm_class(samples, radius, neighbourhood, **kwargs)
+
+
+def train_upm_classes(jobs: dict[str, tuple], workers: int | None = None,
+                      desc: str | None = None) -> dict[str, ClassTrainingResult]:
+    """Train several class maps at once, one process per class (at most ``workers``).
+
+    The classes are independent and each is seeded, so the neurons are identical to
+    training them one after the other.
+
+    Parameters
+    ----------
+    jobs : dict of str to tuple
+        Per class, ``(samples_deg, radius_deg, neighbourhood_deg, kwargs)``: the
+        arguments of :func:`train_upm_class` (``kwargs`` without ``desc``).
+    workers : int, optional
+        Processes; default the usable CPUs. 1 trains in this process, in order.
+    desc : str, optional
+        Label of a progress bar over the classes.
+
+    Returns
+    -------
+    dict of str to ClassTrainingResult
+    """
+    import os
+
+    from upm.progress import progress
+
+    if workers is None:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    import multiprocessing
+
+    workers = max(1, min(int(workers), len(jobs)))
+    if "fork" not in multiprocessing.get_all_start_methods():
+        workers = 1  # no fork (Windows): in order, same neurons
+    names = list(jobs)
+    with progress(total=len(names), desc=desc, unit="class",
+                  disable=None if desc else True) as bar:
+        if workers == 1:
+            results = {}
+            for name in names:
+                results[name] = _train_one(jobs[name])
+                bar.update(1)
+            return results
+        from concurrent.futures import ProcessPoolExecutor
+
+        # fork: the workers need no imports and share the samples copy-on-write.
+        context = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            futures = {name: pool.submit(_train_one, jobs[name]) for name in names}
+            results = {}
+            for name in names:
+                results[name] = futures[name].result()
+                bar.update(1)
+        return results

@@ -4,15 +4,17 @@ same run, and quoted as a ratio, since machines are noisy.
 Each module of this package (discovered automatically) defines
 
 - ``NAME``: a short name (the key in the JSON output), and
-- ``run(context: BenchContext) -> dict``: JSON-serialisable figures. Seconds are
-  measured with :func:`timeit_best`; each reference figure sits beside the figure it
-  calibrates, with the ratio.
+- ``run(context: BenchContext) -> dict``: JSON-serialisable figures. Each figure is
+  timed with :func:`timeit_interleaved` against its reference (rounds of the figure and
+  its reference alternate, so that both see the same machine load), and reported as
+  medians with the median of the per-round ratios.
 """
 
 from __future__ import annotations
 
 import importlib
 import pkgutil
+import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,6 +46,45 @@ def timeit_best(fn: Callable[[], object], repeat: int = 5, number: int = 1) -> f
             fn()
         best = min(best, (time.perf_counter() - start) / number)
     return best
+
+
+def timeit_interleaved(fn: Callable[[], object], reference: Callable[[], object],
+                       rounds: int = 7, number: int = 1,
+                       warmup: bool = True) -> dict[str, float]:
+    """Time ``fn`` and its ``reference`` in alternating rounds; medians.
+
+    Each round times ``number`` calls of ``fn`` then ``number`` calls of ``reference``
+    (the order flips every round), so a change of machine load hits both alike. With
+    ``warmup`` each runs once untimed first.
+
+    Returns
+    -------
+    dict
+        ``s`` and ``reference_s``: median seconds per call; ``ratio``: median over rounds
+        of the per-round ratio ``fn / reference``; ``ratio_min``, ``ratio_max``: its range
+        (how noisy the machine was); ``rounds``.
+    """
+    def once(f):
+        start = time.perf_counter()
+        for _ in range(number):
+            f()
+        return (time.perf_counter() - start) / number
+
+    if warmup:  # caches and lazy builds outside the timing
+        fn()
+        reference()
+    own, ref = [], []
+    for i in range(rounds):
+        if i % 2:
+            ref.append(once(reference))
+            own.append(once(fn))
+        else:
+            own.append(once(fn))
+            ref.append(once(reference))
+    ratios = [a / b for a, b in zip(own, ref, strict=True)]
+    return {"s": statistics.median(own), "reference_s": statistics.median(ref),
+            "ratio": statistics.median(ratios), "ratio_min": min(ratios),
+            "ratio_max": max(ratios), "rounds": rounds}
 
 
 def clip_on_humanoid(context: BenchContext, clip: str, quick_frames: int):

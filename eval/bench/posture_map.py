@@ -1,15 +1,18 @@
-"""Posture maps: UPM training time on the train split, neurons per class, and the
+"""Posture maps: UPM training time on the train split (four classes in parallel, against
+the same training in order, interleaved), neurons per class, and the
 key-posture query per call (single and batched), next to a plain cKDTree query on the
-same neurons (raw degrees, no wrap-around, no interpolation) as the same-run reference.
+same neurons (raw degrees, no wrap-around, no interpolation, k = 1) as the same-run
+reference, timed interleaved with it.
 """
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
 
-from eval.bench import BenchContext, timeit_best
+from eval.bench import BenchContext, timeit_interleaved
 
 NAME = "posture_map"
 
@@ -28,14 +31,28 @@ def run(context: BenchContext) -> dict:
     if context.quick:
         names = ["02_02", "09_06", "35_01"]
     x, names = postures_of_clips(catalog, names)
-    start = time.perf_counter()
-    upm = UniformPostureMap().fit(x, clip_names=names)
-    train_s = time.perf_counter() - start
+    # Training: the four classes in parallel (every usable CPU), interleaved with the
+    # same training in order in one process (the reference; identical neurons).
+    fitted = {}
+
+    def train(workers):
+        fitted[workers] = UniformPostureMap(workers=workers).fit(x, clip_names=names)
+
+    training = timeit_interleaved(lambda: train(None), lambda: train(1),
+                                  rounds=1 if context.quick else 3, warmup=False)
+    upm = fitted[None]
+    train_s = training["s"]
     report = {
         "clips": len(names),
         "frames": len(x),
         "upm_train_s": train_s,
         "upm_train_us_per_frame": 1e6 * train_s / len(x),
+        "upm_train_workers": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+        else 1,
+        "reference_upm_train_in_order_s": training["reference_s"],
+        "upm_train_ratio_to_in_order": training["ratio"],
+        "upm_train_identical_neurons": all(
+            np.array_equal(upm.neurons[c], fitted[1].neurons[c]) for c in CLASS_NAMES),
         "classes": {c: {"neurons": len(upm.neurons[c]),
                         "radius_deg": upm.radius_deg[c],
                         "quantisation_error_mean_deg": upm.stats[c]["quantisation_error_mean_deg"],
@@ -56,10 +73,7 @@ def run(context: BenchContext) -> dict:
     a = held_out[rng.integers(len(held_out), size=n_batch)]
     b = held_out[rng.integers(len(held_out), size=n_batch)]
     upm.key_posture(a[0], b[0])  # build the indexes outside the timing
-    repeat = 3 if context.quick else 7
-    single_s = timeit_best(lambda: [upm.key_posture(a[i], b[i]) for i in range(50)],
-                           repeat=repeat) / 50
-    batch_s = timeit_best(lambda: upm.key_posture(a, b, 0.5), repeat=repeat) / n_batch
+    rounds = 3 if context.quick else 9
     # Reference: one plain cKDTree nearest-neighbour query per class on the same neurons.
     trees = {c: cKDTree(upm.neurons[c]) for c in CLASS_NAMES}
     mid = 0.5 * (a + b)
@@ -68,15 +82,21 @@ def run(context: BenchContext) -> dict:
         for c in CLASS_NAMES:
             trees[c].query(mid[rows, CLASS_SLICES[c]])
 
-    ref_single_s = timeit_best(lambda: [plain(i) for i in range(50)], repeat=repeat) / 50
-    ref_batch_s = timeit_best(lambda: plain(slice(None)), repeat=repeat) / n_batch
+    n_single = 50
+    single = timeit_interleaved(lambda: [upm.key_posture(a[i], b[i]) for i in range(n_single)],
+                                lambda: [plain(i) for i in range(n_single)], rounds=rounds)
+    batch = timeit_interleaved(lambda: upm.key_posture(a, b, 0.5), lambda: plain(slice(None)),
+                               rounds=rounds)
     report.update({
-        "key_posture_us_single": 1e6 * single_s,
-        "key_posture_us_batched": 1e6 * batch_s,
+        "key_posture_us_single": 1e6 * single["s"] / n_single,
+        "key_posture_us_batched": 1e6 * batch["s"] / n_batch,
         "batch_size": n_batch,
-        "reference_ckdtree_4_classes_us_single": 1e6 * ref_single_s,
-        "reference_ckdtree_4_classes_us_batched": 1e6 * ref_batch_s,
-        "key_posture_ratio_single": single_s / ref_single_s,
-        "key_posture_ratio_batched": batch_s / ref_batch_s,
+        "reference_ckdtree_4_classes_us_single": 1e6 * single["reference_s"] / n_single,
+        "reference_ckdtree_4_classes_us_batched": 1e6 * batch["reference_s"] / n_batch,
+        "key_posture_ratio_single": single["ratio"],
+        "key_posture_ratio_single_range": [single["ratio_min"], single["ratio_max"]],
+        "key_posture_ratio_batched": batch["ratio"],
+        "key_posture_ratio_batched_range": [batch["ratio_min"], batch["ratio_max"]],
+        "timing": f"medians of {rounds} rounds, each figure interleaved with its reference",
     })
     return report

@@ -2,7 +2,9 @@
 
 Every figure stands next to a reference measured in the same run on the same machine
 (for example raw MuJoCo mj_step throughput, or a plain cKDTree query), with the ratio,
-since absolute timings vary between machines.
+since absolute timings vary between machines. BLAS is pinned to one thread for the whole
+run, whatever the environment says: small-array work slows down with more threads on a
+loaded machine, and a figure and its reference must run alike.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ def run(args) -> int:
     import json
     import platform
 
+    from threadpoolctl import threadpool_info, threadpool_limits
+
     from eval.bench import BenchContext, discover
     from upm.catalog import Catalog
     from upm.commands.common import print_json
@@ -47,8 +51,11 @@ def run(args) -> int:
         "quick": args.quick,
         "benchmarks": {},
     }
-    for name in progress(names, desc="benchmarks", unit="bench"):
-        report["benchmarks"][name] = modules[name].run(context)
+    with threadpool_limits(1, user_api="blas"):
+        report["blas_threads"] = sorted({p["num_threads"] for p in threadpool_info()
+                                         if p["user_api"] == "blas"})
+        for name in progress(names, desc="benchmarks", unit="bench"):
+            report["benchmarks"][name] = modules[name].run(context)
     if args.out:
         atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
     print_json(report)

@@ -131,11 +131,14 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     n_steps = frames + 1
     k1, k2 = min(context, before.shape[0]), min(context, after.shape[0])
 
-    rot_before = euler_to_matrix(before[-k1:, 3:], order)
-    rot_after = euler_to_matrix(after[:, 3:], order)
+    # One call per rotation function over every frame that needs it (small calls cost
+    # their fixed overhead, not their arithmetic).
+    rotations = euler_to_matrix(np.concatenate([before[-k1:, 3:], after[:, 3:]]), order)
+    rot_before, rot_after = rotations[:k1], rotations[k1:]
     turn = 0.0
     if align_heading:
-        turn = float(wrap_deg(heading_deg(rot_before[-1]) - heading_deg(rot_after[0])))
+        heading_a, heading_b = heading_deg(rotations[k1 - 1:k1 + 1])
+        turn = float(wrap_deg(heading_a - heading_b))
     turn_matrix = axis_rotation(turn, "Y")
     rot_after = turn_matrix @ rot_after
 

@@ -10,6 +10,8 @@ spline's interpolation error between frames).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
@@ -37,8 +39,30 @@ def keyframe_spline(times, values, query_times) -> np.ndarray:
     -------
     ndarray, shape (m, D)
         With fewer than 4 keys the degree drops to n - 1 (2 keys: a straight line).
+
+    Notes
+    -----
+    The interpolating spline is linear in its key values, so its value at the query
+    times is ``W @ values`` with a ``(m, n)`` weight matrix that depends on the times
+    only: :func:`spline_weights` computes it once per time layout (a transition's
+    layout depends on L and the context lengths only) and caches it.
     """
-    times = np.asarray(times, dtype=float)
     values = np.asarray(values, dtype=float)
-    degree = min(3, times.size - 1)
-    return make_interp_spline(times, values, k=degree, axis=0)(np.asarray(query_times, float))
+    return spline_weights(times, query_times) @ values
+
+
+def spline_weights(times, query_times) -> np.ndarray:
+    """The weights ``W``, shape (m, n), of the interpolating spline: its values at
+    ``query_times`` are ``W @ values`` for key values ``values`` (n, D) at ``times``.
+    Read-only; cached per (times, query_times)."""
+    return _weights(tuple(np.asarray(times, dtype=float).tolist()),
+                    tuple(np.asarray(query_times, dtype=float).tolist()))
+
+
+@functools.lru_cache(maxsize=256)
+def _weights(times: tuple, query_times: tuple) -> np.ndarray:
+    t = np.array(times)
+    degree = min(3, t.size - 1)
+    weights = make_interp_spline(t, np.eye(t.size), k=degree, axis=0)(np.array(query_times))
+    weights.setflags(write=False)
+    return weights
