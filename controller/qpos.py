@@ -99,6 +99,22 @@ def joint_layout(model) -> JointLayout:
                        free_qpos=free_qpos, free_dof=free_dof, names=tuple(names))
 
 
+def free_joint(model) -> int:
+    """The id of the model's one free (root) joint.
+
+    Raises
+    ------
+    ValueError
+        If the model has no free joint or more than one.
+    """
+    import mujoco
+
+    free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
+    if free.size != 1:
+        raise ValueError("the model needs exactly one free (root) joint")
+    return int(free[0])
+
+
 def _joint_map(model) -> tuple[np.ndarray, np.ndarray, int]:
     """Posture indices that have a hinge, their qpos addresses, and the free joint's."""
     layout = joint_layout(model)

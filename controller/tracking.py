@@ -333,7 +333,7 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
     driven = mode == "driven"
     start = ref[0].copy()
     if not driven:
-        start[layout.free_qpos + 2] += _floor_depth(sim, mujoco.MjData(sim), start)
+        start[layout.free_qpos + 2] += floor_depth(sim, mujoco.MjData(sim), start)
     return TrackingPlan(
         model=sim, mode=mode, fps=float(fps), substeps=substeps, reference_qpos=ref,
         start_qpos=start, start_qvel=half_vel[0].copy(), ctrl=ctrl,
@@ -511,7 +511,7 @@ def _root_path(free_qpos, substeps: int) -> np.ndarray:
     return np.concatenate([pos, quat], axis=1)
 
 
-def _floor_depth(model, data, qpos) -> float:
+def floor_depth(model, data, qpos) -> float:
     """Deepest penetration of any geom into the floor in state ``qpos``, metres."""
     from controller.contacts import collide
 

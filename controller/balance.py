@@ -1,0 +1,483 @@
+"""A free-root character that keeps its balance while following a reference motion.
+
+At every physics step (``mj_step1``, control, ``mj_step2``) the controller
+
+1. takes the reference at the step's time (hinges and root position interpolated linearly
+   between frames, the root quaternion by normalised linear interpolation; velocities and
+   accelerations from central differences of the 12 Hz low-passed reference,
+   :func:`controller.dynamics.finite_differences`, interpolated the same way);
+2. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` with ``e`` the difference
+   between the reference and the state (``mj_differentiatePos``): the hinges and the root's
+   orientation and height stiffly, the root's horizontal position not at all (only its
+   velocity: the character may drift from the reference's path, and the drift is reported
+   as ``root_drift_m`` rather than fought);
+3. solves whole-body inverse dynamics with the floor contacts of the step in friction
+   pyramids and no force on the root (:class:`controller.wbc.WholeBodyID`);
+4. applies the joint torques, clipped to each joint's strength (the actuators'
+   ``forcerange``), through torque actuators: the model is used with its position servos
+   turned into torque motors of the same strength (:func:`torque_model`). The root has no
+   actuator and ``xfrc_applied`` is never written.
+
+The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
+runs them open-loop from the same start and reproduces the run. The controller has no
+randomness: the ``seed`` is recorded, and the same inputs give the same run.
+
+Per-frame figures (``BalanceRun``):
+
+- ``joint_error_deg``: RMS over the hinges of the simulated minus the reference angle,
+  wrapped to [-180, 180);
+- ``body_error_mm``: mean over the bodies (every joint centre: the proximal end of each
+  bone, the distal end of its parent) of the distance between the simulated and the
+  reference position, each taken relative to its own root (pelvis) position and turned
+  about the vertical by its own root heading: pose error, without the root's drift or
+  heading drift (tilt counts);
+- ``root_drift_m``: horizontal distance between the simulated and the reference pelvis;
+- ``com_height_error_m``: simulated minus reference centre-of-mass height;
+- ``contact_force_n``: total normal force of the floor on the body;
+- ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
+  step, and whether the controller asked for more than the joint's strength.
+
+The character has **fallen** when its pelvis or head is below half its standing height
+while the reference's is not (:mod:`controller.falls`); the simulation then
+runs :data:`AFTER_FALL_S` more and stops (later frames are NaN).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Seconds simulated after a fall before the run stops.
+AFTER_FALL_S = 1.0
+#: Natural frequencies of the tracking (Hz) and damping ratio.
+JOINT_HZ = 5.0
+ROOT_ROTATION_HZ = 3.0
+ROOT_HEIGHT_HZ = 2.0
+ROOT_HORIZONTAL_DAMPING = 3.0
+DAMPING_RATIO = 1.0
+
+WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
+               "body_error_mm_peak", "root_drift_m", "com_height_error_m",
+               "torque_saturation_share", "contact_force_peak_bw", "torque_peak_nm",
+               "wall_s_per_sim_s")
+
+
+@dataclass(frozen=True, eq=False)
+class BalanceRun:
+    """One free-root run of the balance controller.
+
+    Attributes
+    ----------
+    fps : float
+    timestep_s : float
+        The physics step.
+    substeps : int
+        Physics steps per frame.
+    seed : int
+    start_qpos, start_qvel : ndarray, shape (nq,), (nv,)
+        The first state.
+    qpos : ndarray, shape (T, nq)
+        The simulated state at each frame (NaN after the run stopped).
+    ctrl : ndarray, shape (S, nu)
+        The torque applied at every physics step (actuator order), N m.
+    fell : bool
+    fall_frame : int or None
+    fall_time_s : float or None
+        From the run's start.
+    diverged_frame : int or None
+        Frame at which the state became non-finite (the run stopped).
+    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m, contact_force_n :
+        ndarray, shape (T,)
+    torque_nm : ndarray, shape (T, nu)
+    torque_saturated : ndarray of bool, shape (T, nu)
+    weight_n : float
+        The body's weight.
+    wall_s : float
+        Wall-clock seconds of the stepping loop.
+    sim_s : float
+        Simulated seconds.
+    raw_step_s : float
+        Wall seconds of one raw ``mj_step`` of the same model, timed in the same run.
+    """
+
+    fps: float
+    timestep_s: float
+    substeps: int
+    seed: int
+    start_qpos: np.ndarray
+    start_qvel: np.ndarray
+    qpos: np.ndarray
+    ctrl: np.ndarray
+    fell: bool
+    fall_frame: int | None
+    fall_time_s: float | None
+    diverged_frame: int | None
+    joint_error_deg: np.ndarray
+    body_error_mm: np.ndarray
+    root_drift_m: np.ndarray
+    com_height_error_m: np.ndarray
+    contact_force_n: np.ndarray
+    torque_nm: np.ndarray
+    torque_saturated: np.ndarray
+    weight_n: float
+    wall_s: float
+    sim_s: float
+    raw_step_s: float
+
+    @property
+    def steps(self) -> int:
+        return self.ctrl.shape[0]
+
+    @property
+    def n_frames(self) -> int:
+        return self.qpos.shape[0]
+
+    @property
+    def wall_s_per_sim_s(self) -> float:
+        return self.wall_s / self.sim_s if self.sim_s > 0 else math.nan
+
+    @property
+    def raw_steps_per_step(self) -> float:
+        """The controller's cost per physics step in raw ``mj_step`` equivalents."""
+        return (self.wall_s / self.steps / self.raw_step_s
+                if self.steps and self.raw_step_s > 0 else math.nan)
+
+
+def torque_model(model):
+    """A copy of the humanoid whose position servos are torque motors of the same strength.
+
+    Each actuator's force becomes its control (gain 1, no bias), still clamped to the
+    actuator's ``forcerange``; the control is not limited otherwise.
+    """
+    sim = copy.deepcopy(model)
+    sim.actuator_gainprm[:] = 0.0
+    sim.actuator_gainprm[:, 0] = 1.0
+    sim.actuator_biasprm[:] = 0.0
+    sim.actuator_biastype[:] = 0
+    sim.actuator_ctrllimited[:] = 0
+    return sim
+
+
+def _strength(model) -> np.ndarray:
+    return np.minimum(-model.actuator_forcerange[:, 0], model.actuator_forcerange[:, 1])
+
+
+def follow(model, reference_qpos, fps: float, *, seed: int = 0,
+           progress: bool = False) -> BalanceRun:
+    """Simulate the free-root humanoid balancing while it follows a reference.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        A humanoid made by :mod:`humanoid_xml` (not modified).
+    reference_qpos : array_like, shape (T, nq), T >= 2
+        From :func:`controller.to_qpos`.
+    fps : float
+        Frames per second of the reference.
+    seed : int
+        Recorded; the controller is deterministic.
+    progress : bool
+        Show a progress bar (tqdm, off when not a terminal).
+
+    Returns
+    -------
+    BalanceRun
+    """
+    import mujoco
+
+    from controller.body import body_figures
+    from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
+    from controller.falls import fallen, reference_heights
+    from controller.qpos import free_joint
+    from controller.tracking import MAX_STEP_S, floor_depth, physics_substeps
+    from controller.wbc import WholeBodyID
+    from upm.progress import progress as progress_bar
+
+    ref = unwrap_hinges(model, reference_qpos)
+    n_frames = ref.shape[0]
+    if n_frames < 2:
+        raise ValueError("following needs a reference of at least 2 frames")
+    if not np.all(np.isfinite(ref)):
+        raise ValueError("the reference has non-finite values")
+    sim = torque_model(model)
+    substeps = physics_substeps(fps, min(MAX_STEP_S, float(model.opt.timestep)))
+    dt = 1.0 / (fps * substeps)
+    sim.opt.timestep = dt
+    nv, nu = sim.nv, sim.nu
+    joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
+    strength = _strength(sim)
+    solver = WholeBodyID(sim, joint_dofs, strength)
+
+    smooth = lowpass_qpos(sim, ref, fps)
+    ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
+    kp, kd = _gains(nv)
+
+    data = mujoco.MjData(sim)
+    start = ref[0].copy()
+    start[2] += floor_depth(sim, data, start)
+    start_qvel = ref_qvel[0].copy()
+    data.qpos[:] = start
+    data.qvel[:] = start_qvel
+    mujoco.mj_forward(sim, data)
+
+    pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
+    head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
+    figures = body_figures(model)
+    ref_pelvis, ref_head = reference_heights(sim, ref, pelvis_body, head_site)
+    fatal = [int(getattr(mujoco.mjtWarning, w))
+             for w in ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")]
+
+    total = (n_frames - 1) * substeps
+    ctrl = np.zeros((total, nu))
+    qpos = np.full((n_frames, sim.nq), np.nan)
+    contact = np.full(n_frames, np.nan)
+    torque = np.full((n_frames, nu), np.nan)
+    saturated = np.zeros((n_frames, nu), dtype=bool)
+    qpos[0] = data.qpos
+    contact[0] = _floor_normal_force(sim, data)
+    torque[0] = 0.0
+    q_ref = np.empty(sim.nq)
+    err = np.zeros(nv)
+    fall = None
+    stop_frame = n_frames
+    diverged = None
+    steps = 0
+    bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
+                       disable=None if progress else True)
+    clock = time.perf_counter()
+    try:
+        for t in range(1, n_frames):
+            for k in range((t - 1) * substeps, t * substeps):
+                s = k / substeps
+                i = min(int(s), n_frames - 2)
+                w = s - i
+                _interpolate(ref[i], ref[i + 1], w, q_ref)
+                qd_ref = (1 - w) * ref_qvel[i] + w * ref_qvel[i + 1]
+                qdd_ref = (1 - w) * ref_qacc[i] + w * ref_qacc[i + 1]
+                mujoco.mj_step1(sim, data)
+                mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
+                qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
+                tau, _, _ = solver.solve(data, qdd_des)
+                applied = np.clip(tau, -strength, strength)
+                ctrl[k] = applied
+                data.ctrl[:] = applied
+                mujoco.mj_step2(sim, data)
+                steps += 1
+            saturated[t] = np.abs(tau) > strength
+            bar.update(1)
+            if any(data.warning[w_].number for w_ in fatal) or not np.all(
+                    np.isfinite(data.qpos)):
+                diverged = t
+                stop_frame = t
+                break
+            qpos[t] = data.qpos
+            contact[t] = _floor_normal_force(sim, data)
+            torque[t] = data.actuator_force
+            if fall is None:
+                if fallen(data.xpos[pelvis_body, 2], data.site_xpos[head_site, 2],
+                          ref_pelvis[t], ref_head[t], figures):
+                    fall = t
+                    stop_frame = min(n_frames, t + 1 + int(round(AFTER_FALL_S * fps)))
+            if t + 1 >= stop_frame:
+                break
+    finally:
+        bar.close()
+    wall = time.perf_counter() - clock
+    ctrl = ctrl[:steps]
+    saturated[stop_frame:] = False
+
+    joint_err, body_err, drift, com_err = reference_errors(sim, qpos, ref)
+    return BalanceRun(
+        fps=float(fps), timestep_s=dt, substeps=substeps, seed=int(seed),
+        start_qpos=start, start_qvel=start_qvel, qpos=qpos, ctrl=ctrl,
+        fell=fall is not None, fall_frame=fall,
+        fall_time_s=None if fall is None else fall / float(fps), diverged_frame=diverged,
+        joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
+        com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
+        torque_saturated=saturated, weight_n=figures.weight_n, wall_s=wall,
+        sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
+    )
+
+
+def replay(model, run: BalanceRun) -> np.ndarray:
+    """Run a :class:`BalanceRun`'s recorded torques open-loop from its start.
+
+    Returns
+    -------
+    ndarray, shape (T, nq)
+        The state at every frame (NaN where the run had stopped).
+    """
+    import mujoco
+
+    sim = torque_model(model)
+    sim.opt.timestep = run.timestep_s
+    data = mujoco.MjData(sim)
+    data.qpos[:] = run.start_qpos
+    data.qvel[:] = run.start_qvel
+    mujoco.mj_forward(sim, data)
+    out = np.full_like(run.qpos, np.nan)
+    out[0] = data.qpos
+    for k in range(run.steps):
+        mujoco.mj_step1(sim, data)
+        data.ctrl[:] = run.ctrl[k]
+        mujoco.mj_step2(sim, data)
+        if (k + 1) % run.substeps == 0:
+            out[(k + 1) // run.substeps] = data.qpos
+    return out
+
+
+def raw_step_seconds(model, qpos, qvel, steps: int = 300) -> float:
+    """Wall seconds of one plain ``mj_step`` of the model from a state (servos holding
+    the state's pose), the unit of the controller's cost."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos
+    data.qvel[:] = qvel
+    data.ctrl[:] = qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]]
+    clock = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    return (time.perf_counter() - clock) / steps
+
+
+def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[str, float]:
+    """Figures of frames ``start_frame`` to ``stop_frame - 1`` of a run.
+
+    Errors, drift and forces are over the frames of the window before the fall (NaN when
+    there are none); ``fell`` is 1.0 when the character fell at or before the window's
+    last frame.
+
+    Returns
+    -------
+    dict of str to float
+        The keys of :data:`WINDOW_KEYS`.
+    """
+    n = run.n_frames
+    start, stop = max(0, int(start_frame)), min(n, int(stop_frame))
+    if stop <= start:
+        raise ValueError(f"empty window {start_frame}:{stop_frame} of a {n}-frame run")
+    index = np.arange(start, stop)
+    up = index[np.isfinite(run.qpos[index, 0])]
+    if run.fall_frame is not None:
+        up = up[up < run.fall_frame]
+    fell = run.fall_frame is not None and run.fall_frame <= stop - 1
+
+    def stat(values, how):
+        values = np.asarray(values, dtype=float)
+        values = values[np.isfinite(values)]
+        return float(how(values)) if values.size else math.nan
+
+    return {
+        "fell": 1.0 if fell else 0.0,
+        "fall_time_s": run.fall_time_s if fell else math.nan,
+        "joint_error_deg_rms": stat(run.joint_error_deg[up] ** 2,
+                                    lambda v: np.sqrt(np.mean(v))),
+        "body_error_mm_mean": stat(run.body_error_mm[up], np.mean),
+        "body_error_mm_peak": stat(run.body_error_mm[up], np.max),
+        "root_drift_m": stat(run.root_drift_m[up], np.max),
+        "com_height_error_m": stat(np.abs(run.com_height_error_m[up]), np.mean),
+        "torque_saturation_share": stat(run.torque_saturated[up].ravel(), np.mean),
+        "contact_force_peak_bw": stat(run.contact_force_n[up] / run.weight_n, np.max),
+        "torque_peak_nm": stat(np.abs(run.torque_nm[up]).ravel(), np.max),
+        "wall_s_per_sim_s": run.wall_s_per_sim_s,
+    }
+
+
+def reference_errors(model, qpos, reference_qpos):
+    """Per-frame errors of a simulated trajectory against its reference.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    qpos, reference_qpos : ndarray, shape (T, nq)
+        Rows of ``qpos`` that are NaN give NaN.
+
+    Returns
+    -------
+    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m : ndarray, shape (T,)
+        As defined in the module docstring.
+    """
+    import mujoco
+
+    from controller.qpos import joint_layout
+
+    layout = joint_layout(model)
+    hinge = layout.qpos_address
+    n = qpos.shape[0]
+    joint = np.full(n, np.nan)
+    body = np.full(n, np.nan)
+    drift = np.full(n, np.nan)
+    com = np.full(n, np.nan)
+    data = mujoco.MjData(model)
+    pelvis = 1
+    for t in range(n):
+        if not np.all(np.isfinite(qpos[t])):
+            continue
+        d = np.mod(qpos[t, hinge] - reference_qpos[t, hinge] + np.pi, 2 * np.pi) - np.pi
+        joint[t] = np.rad2deg(np.sqrt(np.mean(d ** 2)))
+        poses = []
+        for q in (qpos[t], reference_qpos[t]):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_comPos(model, data)
+            x = data.xpos[1:] - data.xpos[pelvis]
+            heading = _heading(data.xmat[pelvis].reshape(3, 3))
+            c, s = math.cos(-heading), math.sin(-heading)
+            rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            poses.append((x @ rot.T, data.xpos[pelvis, :2].copy(),
+                          float(data.subtree_com[pelvis, 2])))
+        (sim_x, sim_xy, sim_com), (ref_x, ref_xy, ref_com) = poses
+        body[t] = 1000.0 * float(np.mean(np.linalg.norm(sim_x - ref_x, axis=1)))
+        drift[t] = float(np.linalg.norm(sim_xy - ref_xy))
+        com[t] = sim_com - ref_com
+    return joint, body, drift, com
+
+
+def _heading(rotation) -> float:
+    """Heading of a body frame about the vertical: the angle of its x axis in the floor
+    plane."""
+    return math.atan2(rotation[1, 0], rotation[0, 0])
+
+
+def _gains(nv: int):
+    def pd(hz):
+        w = 2 * math.pi * hz
+        return w * w, 2 * DAMPING_RATIO * w
+
+    kp = np.empty(nv)
+    kd = np.empty(nv)
+    kp[6:], kd[6:] = pd(JOINT_HZ)
+    kp[3:6], kd[3:6] = pd(ROOT_ROTATION_HZ)
+    kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
+    kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
+    return kp, kd
+
+
+def _interpolate(a, b, w: float, out) -> None:
+    """``out`` = qpos between two frames: linear, the root quaternion normalised
+    (same hemisphere)."""
+    np.multiply(a, 1 - w, out=out)
+    out += w * b
+    qa, qb = a[3:7], b[3:7]
+    quat = (1 - w) * qa + w * (qb if qa @ qb >= 0 else -qb)
+    out[3:7] = quat / np.linalg.norm(quat)
+
+
+def _floor_normal_force(model, data) -> float:
+    """Total normal force of the floor on the body, N."""
+    import mujoco
+
+    total = 0.0
+    force = np.zeros(6)
+    geom_body = model.geom_bodyid
+    for i in range(data.ncon):
+        g = data.contact.geom[i]
+        if (geom_body[g[0]] == 0) != (geom_body[g[1]] == 0):
+            mujoco.mj_contactForce(model, data, i, force)
+            total += force[0]
+    return total
