@@ -53,12 +53,19 @@ import numpy as np
 
 #: Seconds simulated after a fall before the run stops.
 AFTER_FALL_S = 1.0
+#: The start's lowest point is this far into the floor (a contact from the first step).
+START_DEPTH_M = 0.001
 #: Natural frequencies of the tracking (Hz) and damping ratio.
 JOINT_HZ = 5.0
 ROOT_ROTATION_HZ = 3.0
 ROOT_HEIGHT_HZ = 2.0
 ROOT_HORIZONTAL_DAMPING = 3.0
 DAMPING_RATIO = 1.0
+#: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
+#: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.
+MAX_ACCELERATION = 300.0
+#: Correct the swing foot's placement (:mod:`controller.placement`).
+PLACEMENT = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
@@ -193,7 +200,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
     from controller.qpos import free_joint
-    from controller.tracking import MAX_STEP_S, floor_depth, physics_substeps
+    from controller.tracking import MAX_STEP_S, physics_substeps
+    from controller.placement import FootPlacement
     from controller.wbc import WholeBodyID
     from upm.progress import progress as progress_bar
 
@@ -212,18 +220,23 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     strength = _strength(sim)
     solver = WholeBodyID(sim, joint_dofs, strength)
 
-    smooth = lowpass_qpos(sim, ref, fps)
-    ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
     kp, kd = _gains(nv)
-
+    # Targets come from the low-passed reference (mocap glitches are not targets).
+    smooth = lowpass_qpos(sim, ref, fps)
     data = mujoco.MjData(sim)
-    start = ref[0].copy()
-    start[2] += floor_depth(sim, data, start)
+    # Start with the lowest point on the floor (mocap feet hover or sink by centimetres),
+    # and re-anchor the reference's height by the same shift.
+    height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
+    ref[:, 2] += height_shift
+    smooth[:, 2] += height_shift
+    ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
+    start = smooth[0].copy()
     start_qvel = ref_qvel[0].copy()
     data.qpos[:] = start
     data.qvel[:] = start_qvel
     mujoco.mj_forward(sim, data)
 
+    placement = FootPlacement(sim, ref, fps) if PLACEMENT else None
     pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
@@ -255,12 +268,15 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 s = k / substeps
                 i = min(int(s), n_frames - 2)
                 w = s - i
-                _interpolate(ref[i], ref[i + 1], w, q_ref)
+                _interpolate(smooth[i], smooth[i + 1], w, q_ref)
                 qd_ref = (1 - w) * ref_qvel[i] + w * ref_qvel[i + 1]
                 qdd_ref = (1 - w) * ref_qacc[i] + w * ref_qacc[i + 1]
                 mujoco.mj_step1(sim, data)
+                if placement is not None:
+                    placement.adjust(data, min(int(round(s)), n_frames - 1), q_ref)
                 mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
                 qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
+                np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
                 tau, _, _ = solver.solve(data, qdd_des)
                 applied = np.clip(tau, -strength, strength)
                 ctrl[k] = applied
@@ -436,6 +452,21 @@ def reference_errors(model, qpos, reference_qpos):
         drift[t] = float(np.linalg.norm(sim_xy - ref_xy))
         com[t] = sim_com - ref_com
     return joint, body, drift, com
+
+
+def floor_clearance(model, data, qpos) -> float:
+    """Signed distance from the floor to the body's lowest point in state ``qpos``,
+    metres (negative: in the floor)."""
+    import mujoco
+
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    floor = [g for g in range(model.ngeom)
+             if model.geom_bodyid[g] == 0 and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE]
+    if len(floor) != 1:
+        raise ValueError("the model needs exactly one floor plane")
+    return min(mujoco.mj_geomDistance(model, data, floor[0], g, 1.0, None)
+               for g in range(model.ngeom) if model.geom_bodyid[g] != 0)
 
 
 def _heading(rotation) -> float:

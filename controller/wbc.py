@@ -40,12 +40,14 @@ class Weights:
     """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2)."""
 
     root_rotation: float = 10.0
+    root_yaw: float = 1.0
     root_height: float = 3.0
     root_horizontal: float = 1.0
     joints: float = 1.0
     contact: float = 100.0
     force: float = 1e-2
     torque: float = 0.3
+    flight_root: float = 0.01
 
 
 class WholeBodyID:
@@ -80,8 +82,9 @@ class WholeBodyID:
         mu = FRICTION
         self.edges = np.array([[mu, 0, 1], [-mu, 0, 1], [0, mu, 1], [0, -mu, 1]], float)
         self.edges /= np.linalg.norm(self.edges, axis=1, keepdims=True)
+        # root rotation rows are about the pelvis's own axes; its z axis is the body's up
         root_w = np.array([self.w.root_horizontal] * 2 + [self.w.root_height]
-                          + [self.w.root_rotation] * 3)
+                          + [self.w.root_rotation] * 2 + [self.w.root_yaw])
         self.root_w = root_w
 
     def floor_contacts(self, data):
@@ -149,8 +152,11 @@ class WholeBodyID:
         g0[:6] = -Mrr_inv @ h[:6]
 
         rows, rhs = [], []
-        rows.append(self.root_w[:, None] * G[:6])
-        rhs.append(self.root_w * (qdd_des[:6] - g0[:6]))
+        # Without floor contact nothing but the limbs' reaction turns the root: asking for
+        # a root acceleration would only fling the limbs.
+        root_w = self.root_w if nc else self.root_w * w.flight_root
+        rows.append(root_w[:, None] * G[:6])
+        rhs.append(root_w * (qdd_des[:6] - g0[:6]))
         rows.append(w.joints * G[6:])
         rhs.append(w.joints * qdd_des[6:])
         if nc:
