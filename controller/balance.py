@@ -64,6 +64,10 @@ DAMPING_RATIO = 1.0
 #: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
 #: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.
 MAX_ACCELERATION = 300.0
+#: Horizontal stiffness of the pelvis over the supporting feet (1/s^2), re-anchored.
+SUPPORT_KP = 0.0
+#: Targets are kept this far inside each hinge's range, degrees.
+LIMIT_MARGIN_DEG = 2.0
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
 
@@ -101,6 +105,10 @@ class BalanceRun:
         ndarray, shape (T,)
     torque_nm : ndarray, shape (T, nu)
     torque_saturated : ndarray of bool, shape (T, nu)
+    limit_rows, self_contacts : ndarray of int, shape (T,)
+        Active joint-limit constraint rows and self-contacts at each frame.
+    warnings : dict of str to int
+        MuJoCo's warning counters that are not zero.
     weight_n : float
         The body's weight.
     wall_s : float
@@ -130,6 +138,9 @@ class BalanceRun:
     contact_force_n: np.ndarray
     torque_nm: np.ndarray
     torque_saturated: np.ndarray
+    limit_rows: np.ndarray
+    self_contacts: np.ndarray
+    warnings: dict
     weight_n: float
     wall_s: float
     sim_s: float
@@ -199,9 +210,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.body import body_figures
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
-    from controller.qpos import free_joint
-    from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.placement import FootPlacement
+    from controller.qpos import free_joint, joint_layout
+    from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.wbc import WholeBodyID
     from upm.progress import progress as progress_bar
 
@@ -221,6 +232,11 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     solver = WholeBodyID(sim, joint_dofs, strength)
 
     kp, kd = _gains(nv)
+    layout = joint_layout(sim)
+    hinge_q, hinge_v = layout.qpos_address, layout.dof_address
+    margin = np.deg2rad(LIMIT_MARGIN_DEG)
+    low, high = np.deg2rad(layout.range_deg.T)
+    low, high = low + margin, high - margin
     # Targets come from the low-passed reference (mocap glitches are not targets).
     smooth = lowpass_qpos(sim, ref, fps)
     data = mujoco.MjData(sim)
@@ -250,6 +266,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     contact = np.full(n_frames, np.nan)
     torque = np.full((n_frames, nu), np.nan)
     saturated = np.zeros((n_frames, nu), dtype=bool)
+    limit_rows = np.zeros(n_frames, dtype=int)
+    self_contacts = np.zeros(n_frames, dtype=int)
+    limit_type = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
     qpos[0] = data.qpos
     contact[0] = _floor_normal_force(sim, data)
     torque[0] = 0.0
@@ -272,9 +291,18 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 qd_ref = (1 - w) * ref_qvel[i] + w * ref_qvel[i + 1]
                 qdd_ref = (1 - w) * ref_qacc[i] + w * ref_qacc[i + 1]
                 mujoco.mj_step1(sim, data)
+                # targets inside the joint ranges: the limits' forces are not in the plan
+                clipped = (q_ref[hinge_q] < low) | (q_ref[hinge_q] > high)
+                if clipped.any():
+                    q_ref[hinge_q] = np.clip(q_ref[hinge_q], low, high)
+                    qd_ref[hinge_v[clipped]] = 0.0
+                    qdd_ref[hinge_v[clipped]] = 0.0
+                frame = min(int(round(s)), n_frames - 1)
                 if placement is not None:
-                    placement.adjust(data, min(int(round(s)), n_frames - 1), q_ref)
+                    placement.adjust(data, frame, q_ref)
                 mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
+                if SUPPORT_KP:
+                    err[:2] = placement.support_offset_error(data, frame)
                 qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
                 np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
                 tau, _, _ = solver.solve(data, qdd_des)
@@ -293,6 +321,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             qpos[t] = data.qpos
             contact[t] = _floor_normal_force(sim, data)
             torque[t] = data.actuator_force
+            limit_rows[t] = int(np.count_nonzero(data.efc_type[:data.nefc] == limit_type))
+            if data.ncon:
+                pairs = sim.geom_bodyid[np.asarray(data.contact.geom[:data.ncon])]
+                self_contacts[t] = int(np.count_nonzero((pairs[:, 0] != 0) & (pairs[:, 1] != 0)))
             if fall is None:
                 if fallen(data.xpos[pelvis_body, 2], data.site_xpos[head_site, 2],
                           ref_pelvis[t], ref_head[t], figures):
@@ -314,7 +346,12 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         fall_time_s=None if fall is None else fall / float(fps), diverged_frame=diverged,
         joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
         com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
-        torque_saturated=saturated, weight_n=figures.weight_n, wall_s=wall,
+        torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
+        warnings={name: int(data.warning[int(getattr(mujoco.mjtWarning, name))].number)
+                  for name in mujoco.mjtWarning.__members__
+                  if name != "mjNWARNING"
+                  and data.warning[int(getattr(mujoco.mjtWarning, name))].number},
+        weight_n=figures.weight_n, wall_s=wall,
         sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
     )
 
@@ -485,7 +522,7 @@ def _gains(nv: int):
     kp[6:], kd[6:] = pd(JOINT_HZ)
     kp[3:6], kd[3:6] = pd(ROOT_ROTATION_HZ)
     kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
-    kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
+    kp[:2], kd[:2] = SUPPORT_KP, ROOT_HORIZONTAL_DAMPING
     return kp, kd
 
 
