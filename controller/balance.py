@@ -180,8 +180,10 @@ def torque_model(model):
     return sim
 
 
-def _strength(model) -> np.ndarray:
-    return np.minimum(-model.actuator_forcerange[:, 0], model.actuator_forcerange[:, 1])
+def _torque_range(model) -> np.ndarray:
+    """Each actuator's torque range, shape (nu, 2) (``forcerange``; unlimited: inf)."""
+    limited = model.actuator_forcelimited.astype(bool)[:, None]
+    return np.where(limited, model.actuator_forcerange, np.array([-np.inf, np.inf]))
 
 
 def follow(model, reference_qpos, fps: float, *, seed: int = 0,
@@ -228,8 +230,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     sim.opt.timestep = dt
     nv, nu = sim.nv, sim.nu
     joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
-    strength = _strength(sim)
-    solver = WholeBodyID(sim, joint_dofs, strength)
+    torque_range = _torque_range(sim)
+    low_nm, high_nm = torque_range.T
+    solver = WholeBodyID(sim, joint_dofs, torque_range)
 
     kp, kd = _gains(nv)
     layout = joint_layout(sim)
@@ -306,12 +309,12 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
                 np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
                 tau, _, _ = solver.solve(data, qdd_des)
-                applied = np.clip(tau, -strength, strength)
+                applied = np.clip(tau, low_nm, high_nm)
                 ctrl[k] = applied
                 data.ctrl[:] = applied
                 mujoco.mj_step2(sim, data)
                 steps += 1
-            saturated[t] = np.abs(tau) > strength
+            saturated[t] = (tau < low_nm) | (tau > high_nm)
             bar.update(1)
             if any(data.warning[w_].number for w_ in fatal) or not np.all(
                     np.isfinite(data.qpos)):

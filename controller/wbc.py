@@ -59,12 +59,12 @@ class WholeBodyID:
         The simulated humanoid: one free joint at DOFs 0-5, then one hinge per actuator.
     joint_dofs : ndarray of int, shape (nu,)
         The DOF each actuator drives, in actuator order.
-    strength_nm : ndarray, shape (nu,)
-        Each actuator's largest torque.
+    torque_range_nm : ndarray, shape (nu, 2)
+        Each actuator's torque range (its ``forcerange``: lower, upper).
     weights : Weights
     """
 
-    def __init__(self, model, joint_dofs, strength_nm, weights: Weights | None = None):
+    def __init__(self, model, joint_dofs, torque_range_nm, weights: Weights | None = None):
         self.model = model
         self.nv = int(model.nv)
         self.joint_dofs = np.asarray(joint_dofs, dtype=int)
@@ -72,8 +72,12 @@ class WholeBodyID:
             raise ValueError("whole-body control needs the free joint at DOFs 0-5 and one "
                              "actuator per hinge")
         self.hinge_row = self.joint_dofs - 6  # actuator a drives hinge row hinge_row[a]
-        self.strength = np.empty(self.nv - 6)
-        self.strength[self.hinge_row] = np.asarray(strength_nm, dtype=float)
+        torque_range = np.asarray(torque_range_nm, dtype=float)
+        self.low = np.empty(self.nv - 6)
+        self.high = np.empty(self.nv - 6)
+        self.low[self.hinge_row] = torque_range[:, 0]
+        self.high[self.hinge_row] = torque_range[:, 1]
+        self.strength = np.maximum(-self.low, self.high)
         self.w = weights or Weights()
         self.mass = float(np.sum(model.body_mass[1:]))
         self.weight_n = self.mass * float(np.linalg.norm(model.opt.gravity))
@@ -184,7 +188,7 @@ class WholeBodyID:
         C[nj:, :nl] = np.eye(nl)
         C[:, nl:nl + nj] = -T.T
         C[:, nl + nj:] = T.T
-        d = np.concatenate([np.zeros(nl), t0 - self.strength, -t0 - self.strength])
+        d = np.concatenate([np.zeros(nl), t0 - self.high, self.low - t0])
         try:
             x = quadprog.solve_qp(P, A.T @ b, C, d, 0)[0]
         except ValueError:  # numerically infeasible: least squares, forces clipped at 0
