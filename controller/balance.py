@@ -59,7 +59,7 @@ START_DEPTH_M = 0.001
 JOINT_HZ = 5.0
 ROOT_ROTATION_HZ = 3.0
 ROOT_HEIGHT_HZ = 2.0
-ROOT_HORIZONTAL_DAMPING = 3.0
+ROOT_HORIZONTAL_DAMPING = 10.0
 DAMPING_RATIO = 1.0
 #: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
 #: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 import quadprog
 
+#: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
+CONTACT_DAMPING = 20.0
 #: Friction coefficient of the pyramid (below the model's 1.0, so planned forces stick).
 FRICTION = 0.8
 
@@ -42,7 +44,7 @@ class Weights:
     root_rotation: float = 10.0
     root_yaw: float = 1.0
     root_height: float = 3.0
-    root_horizontal: float = 1.0
+    root_horizontal: float = 10.0
     joints: float = 1.0
     contact: float = 100.0
     force: float = 1e-2
@@ -105,7 +107,7 @@ class WholeBodyID:
         body = np.where(bodies[floor, 0] == 0, bodies[floor, 1], bodies[floor, 0])
         return pts, body
 
-    def solve(self, data, qdd_des, contact_damping: float = 20.0):
+    def solve(self, data, qdd_des, contact_damping: float | None = None):
         """Torques for the current state.
 
         Parameters
@@ -127,6 +129,8 @@ class WholeBodyID:
         """
         import mujoco
 
+        if contact_damping is None:
+            contact_damping = CONTACT_DAMPING
         model, nv, w = self.model, self.nv, self.w
         M = self.M
         mujoco.mj_fullM(model, data, M)
