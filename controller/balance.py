@@ -68,6 +68,8 @@ MAX_ACCELERATION = 300.0
 SUPPORT_KP = 0.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
+#: Floor contacts of a foot the reference has in the air are not planned as support.
+SWING_EXCLUDE = False
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
 
@@ -255,7 +257,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     data.qvel[:] = start_qvel
     mujoco.mj_forward(sim, data)
 
-    placement = FootPlacement(sim, ref, fps) if PLACEMENT else None
+    placement = FootPlacement(sim, ref, fps)
     pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
@@ -301,14 +303,16 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     qd_ref[hinge_v[clipped]] = 0.0
                     qdd_ref[hinge_v[clipped]] = 0.0
                 frame = min(int(round(s)), n_frames - 1)
-                if placement is not None:
+                if PLACEMENT:
                     placement.adjust(data, frame, q_ref)
                 mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
                 if SUPPORT_KP:
                     err[:2] = placement.support_offset_error(data, frame)
                 qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
                 np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
-                tau, _, _ = solver.solve(data, qdd_des)
+                tau, _, _ = solver.solve(
+                    data, qdd_des,
+                    exclude=placement.swing_bodies(frame) if SWING_EXCLUDE else ())
                 applied = np.clip(tau, low_nm, high_nm)
                 ctrl[k] = applied
                 data.ctrl[:] = applied

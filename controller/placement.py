@@ -25,6 +25,10 @@ import numpy as np
 PLACEMENT_GAIN = 1.0
 #: The largest shift of the swing foot, metres.
 MAX_SHIFT_M = 0.25
+#: A reference foot is down when its ankle moves slower than this ...
+FOOT_DOWN_SPEED_MPS = 0.8
+#: ... and is within this height of its lowest in the motion.
+FOOT_DOWN_HEIGHT_M = 0.08
 _SIDES = ("l", "r")
 
 
@@ -79,8 +83,21 @@ class FootPlacement:
             self.ref_ankle[t] = data.xpos[self.ankle]
             self.ref_pelvis[t] = data.xpos[1, :2]
         self.ref_com_vel = np.gradient(self.ref_com, 1.0 / fps, axis=0)
+        # the reference's feet on the floor: slow and low (mocap contact detection)
+        speed = np.linalg.norm(np.gradient(self.ref_ankle, 1.0 / fps, axis=0), axis=2)
+        height = self.ref_ankle[:, :, 2]
+        low = height < height.min(axis=0) + FOOT_DOWN_HEIGHT_M
+        self.ref_down = (speed < FOOT_DOWN_SPEED_MPS) & low  # (T, 2)
         g = float(np.linalg.norm(model.opt.gravity))
         self.time_constant_s = math.sqrt(max(float(np.median(self.ref_com[:, 2])), 0.1) / g)
+
+    def swing_bodies(self, frame: int) -> set:
+        """The bodies of the feet that the reference has in the air at a frame."""
+        out = set()
+        for side in range(2):
+            if not self.ref_down[frame, side]:
+                out |= self.foot_bodies[side]
+        return out
 
     def _touching(self, data) -> np.ndarray:
         """Whether each foot (left, right) touches the floor, bool (2,)."""

@@ -93,8 +93,9 @@ class WholeBodyID:
                           + [self.w.root_rotation] * 2 + [self.w.root_yaw])
         self.root_w = root_w
 
-    def floor_contacts(self, data):
-        """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``."""
+    def floor_contacts(self, data, exclude=()):
+        """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``,
+        without the contacts of the bodies in ``exclude``."""
         n = data.ncon
         if n == 0:
             return np.zeros((0, 3)), np.zeros(0, dtype=int)
@@ -105,9 +106,12 @@ class WholeBodyID:
             return np.zeros((0, 3)), np.zeros(0, dtype=int)
         pts = np.asarray(data.contact.pos[:n])[floor]
         body = np.where(bodies[floor, 0] == 0, bodies[floor, 1], bodies[floor, 0])
+        if exclude:
+            keep = np.array([b not in exclude for b in body], dtype=bool)
+            pts, body = pts[keep], body[keep]
         return pts, body
 
-    def solve(self, data, qdd_des, contact_damping: float | None = None):
+    def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=()):
         """Torques for the current state.
 
         Parameters
@@ -117,6 +121,9 @@ class WholeBodyID:
         qdd_des : ndarray, shape (nv,)
         contact_damping : float
             Desired contact-point acceleration ``-contact_damping * v_c``, 1/s.
+        exclude : set of int
+            Bodies whose floor contacts are not planned as support (a swing foot that
+            scrapes the floor: the floor still pushes it, the plan does not lean on it).
 
         Returns
         -------
@@ -135,7 +142,7 @@ class WholeBodyID:
         M = self.M
         mujoco.mj_fullM(model, data, M)
         h = np.asarray(data.qfrc_bias) - np.asarray(data.qfrc_passive)
-        pts, bodies = self.floor_contacts(data)
+        pts, bodies = self.floor_contacts(data, exclude)
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
         for i in range(nc):
