@@ -111,6 +111,9 @@ class BalanceRun:
         Active joint-limit constraint rows and self-contacts at each frame.
     warnings : dict of str to int
         MuJoCo's warning counters that are not zero.
+    external_force_peak : float
+        The largest ``|xfrc_applied|`` component seen at any frame (zero: nothing but
+        the joints' torques, gravity and contacts moved the body).
     weight_n : float
         The body's weight.
     wall_s : float
@@ -143,6 +146,7 @@ class BalanceRun:
     limit_rows: np.ndarray
     self_contacts: np.ndarray
     warnings: dict
+    external_force_peak: float
     weight_n: float
     wall_s: float
     sim_s: float
@@ -283,6 +287,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     stop_frame = n_frames
     diverged = None
     steps = 0
+    external = 0.0
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
@@ -328,6 +333,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             qpos[t] = data.qpos
             contact[t] = _floor_normal_force(sim, data)
             torque[t] = data.actuator_force
+            external = max(external, float(np.abs(data.xfrc_applied).max()))
             limit_rows[t] = int(np.count_nonzero(data.efc_type[:data.nefc] == limit_type))
             if data.ncon:
                 pairs = sim.geom_bodyid[np.asarray(data.contact.geom[:data.ncon])]
@@ -358,7 +364,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                   for name in mujoco.mjtWarning.__members__
                   if name != "mjNWARNING"
                   and data.warning[int(getattr(mujoco.mjtWarning, name))].number},
-        weight_n=figures.weight_n, wall_s=wall,
+        external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
         sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
     )
 
