@@ -218,6 +218,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.body import body_figures
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
+    from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
     from controller.qpos import free_joint, joint_layout
     from controller.tracking import MAX_STEP_S, physics_substeps
@@ -266,8 +267,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
     ref_pelvis, ref_head = reference_heights(sim, ref, pelvis_body, head_site)
-    fatal = [int(getattr(mujoco.mjtWarning, w))
-             for w in ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC")]
 
     total = (n_frames - 1) * substeps
     ctrl = np.zeros((total, nu))
@@ -291,7 +290,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
-    try:
+    with collected_warnings(), bar:
         for t in range(1, n_frames):
             for k in range((t - 1) * substeps, t * substeps):
                 s = k / substeps
@@ -325,8 +324,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
             bar.update(1)
-            if any(data.warning[w_].number for w_ in fatal) or not np.all(
-                    np.isfinite(data.qpos)):
+            if fatal(data) or not np.all(np.isfinite(data.qpos)):
                 diverged = t
                 stop_frame = t
                 break
@@ -345,8 +343,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     stop_frame = min(n_frames, t + 1 + int(round(AFTER_FALL_S * fps)))
             if t + 1 >= stop_frame:
                 break
-    finally:
-        bar.close()
     wall = time.perf_counter() - clock
     ctrl = ctrl[:steps]
     saturated[stop_frame:] = False
@@ -360,10 +356,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
         com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
         torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
-        warnings={name: int(data.warning[int(getattr(mujoco.mjtWarning, name))].number)
-                  for name in mujoco.mjtWarning.__members__
-                  if name != "mjNWARNING"
-                  and data.warning[int(getattr(mujoco.mjtWarning, name))].number},
+        warnings=warning_counts(data),
         external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
         sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
     )

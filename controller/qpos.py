@@ -99,6 +99,11 @@ def joint_layout(model) -> JointLayout:
                        free_qpos=free_qpos, free_dof=free_dof, names=tuple(names))
 
 
+def wrap_rad(x):
+    """Angles wrapped to [-pi, pi)."""
+    return np.mod(np.asarray(x) + np.pi, 2 * np.pi) - np.pi
+
+
 def free_joint(model) -> int:
     """The id of the model's one free (root) joint.
 
