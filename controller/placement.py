@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 #: Share of the capture-offset difference the swing foot is moved by.
-PLACEMENT_GAIN = 1.0
+PLACEMENT_GAIN = 0.5
 #: The largest shift of the swing foot, metres.
 MAX_SHIFT_M = 0.25
 #: A reference foot is down when its ankle moves slower than this ...
@@ -40,10 +40,11 @@ class FootPlacement:
     model : mujoco.MjModel
     reference_qpos : ndarray, shape (T, nq)
     fps : float
-    gain : float
+    gain : float, optional
+        Default :data:`PLACEMENT_GAIN`.
     """
 
-    def __init__(self, model, reference_qpos, fps: float, gain: float = PLACEMENT_GAIN):
+    def __init__(self, model, reference_qpos, fps: float, gain: float | None = None):
         import mujoco
 
         def body(name):
@@ -53,7 +54,7 @@ class FootPlacement:
             return i
 
         self.model = model
-        self.gain = float(gain)
+        self.gain = float(PLACEMENT_GAIN if gain is None else gain)
         self.ankle = np.array([body(f"{s}foot") for s in _SIDES])
         self.foot_bodies = [
             {b for b in range(model.nbody) if _descends(model, b, body(f"{s}foot"))}
