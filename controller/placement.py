@@ -22,13 +22,15 @@ import math
 import numpy as np
 
 #: Share of the capture-offset difference the swing foot is moved by.
-PLACEMENT_GAIN = 0.5
+PLACEMENT_GAIN = 0.3
 #: The largest shift of the swing foot, metres.
 MAX_SHIFT_M = 0.25
 #: A reference foot is down when its ankle moves slower than this ...
 FOOT_DOWN_SPEED_MPS = 0.8
 #: ... and is within this height of its lowest in the motion.
 FOOT_DOWN_HEIGHT_M = 0.08
+#: Also keep the swing ankle at least at the reference's height (hip and knee).
+SWING_HEIGHT = True
 _SIDES = ("l", "r")
 
 
@@ -67,6 +69,10 @@ class FootPlacement:
             qadr = [int(model.jnt_qposadr[j]) for j in range(model.njnt)
                     if (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "")
                     .startswith(f"{s}femur_")]
+            if SWING_HEIGHT:
+                knee = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"{s}tibia_rx")
+                dofs.append(int(model.jnt_dofadr[knee]))
+                qadr.append(int(model.jnt_qposadr[knee]))
             hips.append((np.array(dofs), np.array(qadr)))
         self.hips = hips
         self._jacp = np.zeros((3, model.nv))
@@ -165,8 +171,15 @@ class FootPlacement:
         dofs, qadr = self.hips[swing]
         mujoco.mj_jac(self.model, data, self._jacp, None, data.xpos[self.ankle[swing]],
                       int(self.ankle[swing]))
-        jac = self._jacp[:2, dofs]  # (2, 3)
-        q_ref[qadr] += np.linalg.lstsq(jac, shift, rcond=None)[0]
+        if SWING_HEIGHT:
+            # and the ankle at the reference's height above the floor (not lower: a swing
+            # foot that lands early lands on its toes, behind the body)
+            lift = max(0.0, self.ref_ankle[frame, swing, 2] - data.xpos[self.ankle[swing], 2])
+            jac = self._jacp[:, dofs]
+            q_ref[qadr] += np.linalg.lstsq(jac, np.append(shift, lift), rcond=1e-3)[0]
+        else:
+            jac = self._jacp[:2, dofs]  # (2, 3)
+            q_ref[qadr] += np.linalg.lstsq(jac, shift, rcond=None)[0]
         return shift
 
 
