@@ -68,6 +68,12 @@ MAX_ACCELERATION = 300.0
 SUPPORT_KP = 0.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
+#: Foot-placement gains chosen among by short rollouts (one entry: no selection) ...
+SELECT_GAINS = (0.3, 0.6)
+#: ... every this many seconds ...
+SELECT_EVERY_S = 0.5
+#: ... each rolled out this far ahead.
+LOOKAHEAD_S = 1.0
 #: Floor contacts of a foot the reference has in the air are not planned as support.
 SWING_EXCLUDE = False
 #: Correct the swing foot's placement (:mod:`controller.placement`).
@@ -235,15 +241,13 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     substeps = physics_substeps(fps, min(MAX_STEP_S, float(model.opt.timestep)))
     dt = 1.0 / (fps * substeps)
     sim.opt.timestep = dt
-    nv, nu = sim.nv, sim.nu
+    nu = sim.nu
     joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
     torque_range = _torque_range(sim)
     low_nm, high_nm = torque_range.T
     solver = WholeBodyID(sim, joint_dofs, torque_range)
 
-    kp, kd = _gains(nv)
     layout = joint_layout(sim)
-    hinge_q, hinge_v = layout.qpos_address, layout.dof_address
     margin = np.deg2rad(LIMIT_MARGIN_DEG)
     low, high = np.deg2rad(layout.range_deg.T)
     low, high = low + margin, high - margin
@@ -263,6 +267,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     mujoco.mj_forward(sim, data)
 
     placement = FootPlacement(sim, ref, fps)
+    control = _Control(sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
+                       (low, high), torque_range)
+    gain = placement.gain
     pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
@@ -280,47 +287,23 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     qpos[0] = data.qpos
     contact[0] = _floor_normal_force(sim, data)
     torque[0] = 0.0
-    q_ref = np.empty(sim.nq)
-    err = np.zeros(nv)
     fall = None
     stop_frame = n_frames
     diverged = None
     steps = 0
     external = 0.0
+    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
+                if len(SELECT_GAINS) > 1 and PLACEMENT else None)
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
     with collected_warnings(), bar:
         for t in range(1, n_frames):
+            if selector is not None and (t - 1) % selector.every_frames == 0:
+                gain = selector.choose(data, t - 1)
             for k in range((t - 1) * substeps, t * substeps):
-                s = k / substeps
-                i = min(int(s), n_frames - 2)
-                w = s - i
-                _interpolate(smooth[i], smooth[i + 1], w, q_ref)
-                qd_ref = (1 - w) * ref_qvel[i] + w * ref_qvel[i + 1]
-                qdd_ref = (1 - w) * ref_qacc[i] + w * ref_qacc[i + 1]
-                mujoco.mj_step1(sim, data)
-                # targets inside the joint ranges: the limits' forces are not in the plan
-                clipped = (q_ref[hinge_q] < low) | (q_ref[hinge_q] > high)
-                if clipped.any():
-                    q_ref[hinge_q] = np.clip(q_ref[hinge_q], low, high)
-                    qd_ref[hinge_v[clipped]] = 0.0
-                    qdd_ref[hinge_v[clipped]] = 0.0
-                frame = min(int(round(s)), n_frames - 1)
-                if PLACEMENT:
-                    placement.adjust(data, frame, q_ref)
-                mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
-                if SUPPORT_KP:
-                    err[:2] = placement.support_offset_error(data, frame)
-                qdd_des = qdd_ref + kp * err + kd * (qd_ref - data.qvel)
-                np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
-                tau, _, _ = solver.solve(
-                    data, qdd_des,
-                    exclude=placement.swing_bodies(frame) if SWING_EXCLUDE else ())
-                applied = np.clip(tau, low_nm, high_nm)
+                applied, tau = control.step(data, k, gain)
                 ctrl[k] = applied
-                data.ctrl[:] = applied
-                mujoco.mj_step2(sim, data)
                 steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
             bar.update(1)
@@ -360,6 +343,101 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
         sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
     )
+
+
+class _Control:
+    """One physics step of the controller: targets, foot placement, QP, torques."""
+
+    def __init__(self, sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
+                 target_range, torque_range):
+        from controller.qpos import joint_layout
+
+        self.sim, self.smooth = sim, smooth
+        self.ref_qvel, self.ref_qacc = ref_qvel, ref_qacc
+        self.substeps, self.solver, self.placement = substeps, solver, placement
+        self.n_frames = smooth.shape[0]
+        self.kp, self.kd = _gains(sim.nv)
+        layout = joint_layout(sim)
+        self.hinge_q, self.hinge_v = layout.qpos_address, layout.dof_address
+        self.low, self.high = target_range
+        self.low_nm, self.high_nm = np.asarray(torque_range).T
+        self.q_ref = np.empty(sim.nq)
+        self.err = np.zeros(sim.nv)
+
+    def step(self, data, k: int, gain: float):
+        """Control and take physics step ``k``; returns the applied and the planned
+        torques, (nu,) each."""
+        import mujoco
+
+        sim, n_frames, q_ref, err = self.sim, self.n_frames, self.q_ref, self.err
+        s = k / self.substeps
+        i = min(int(s), n_frames - 2)
+        w = s - i
+        _interpolate(self.smooth[i], self.smooth[i + 1], w, q_ref)
+        qd_ref = (1 - w) * self.ref_qvel[i] + w * self.ref_qvel[i + 1]
+        qdd_ref = (1 - w) * self.ref_qacc[i] + w * self.ref_qacc[i + 1]
+        mujoco.mj_step1(sim, data)
+        # targets inside the joint ranges: the limits' forces are not in the plan
+        hinge = q_ref[self.hinge_q]
+        clipped = (hinge < self.low) | (hinge > self.high)
+        if clipped.any():
+            q_ref[self.hinge_q] = np.clip(hinge, self.low, self.high)
+            qd_ref[self.hinge_v[clipped]] = 0.0
+            qdd_ref[self.hinge_v[clipped]] = 0.0
+        frame = min(int(round(s)), n_frames - 1)
+        if PLACEMENT:
+            self.placement.adjust(data, frame, q_ref, gain)
+        mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
+        if SUPPORT_KP:
+            err[:2] = self.placement.support_offset_error(data, frame)
+        qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
+        np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
+        tau, _, _ = self.solver.solve(
+            data, qdd_des,
+            exclude=self.placement.swing_bodies(frame) if SWING_EXCLUDE else ())
+        applied = np.clip(tau, self.low_nm, self.high_nm)
+        data.ctrl[:] = applied
+        mujoco.mj_step2(sim, data)
+        return applied, tau
+
+
+class _GainSelector:
+    """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
+    :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
+    pelvis nearest the reference's height and upright; the first on ties."""
+
+    def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int):
+        import mujoco
+
+        self.control = control
+        self.ref_pelvis = ref_pelvis
+        self.pelvis_body = pelvis_body
+        self.n_frames = n_frames
+        self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
+        self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
+        self.scratch = mujoco.MjData(control.sim)
+
+    def choose(self, data, frame: int) -> float:
+        import mujoco
+
+        control, sim, scratch = self.control, self.control.sim, self.scratch
+        last = min(self.n_frames - 1, frame + self.lookahead_frames)
+        best, best_cost = SELECT_GAINS[0], math.inf
+        for gain in SELECT_GAINS:
+            mujoco.mj_copyData(scratch, sim, data)
+            cost = 0.0
+            for t in range(frame + 1, last + 1):
+                for k in range((t - 1) * control.substeps, t * control.substeps):
+                    control.step(scratch, k, gain)
+                if not np.all(np.isfinite(scratch.qpos)):
+                    cost = math.inf
+                    break
+                low = self.ref_pelvis[t] - scratch.xpos[self.pelvis_body, 2]
+                tilt = 1.0 - scratch.xmat[self.pelvis_body, 8]
+                cost += max(0.0, low) + tilt
+            if cost < best_cost:
+                best, best_cost = gain, cost
+        return best
 
 
 def replay(model, run: BalanceRun) -> np.ndarray:

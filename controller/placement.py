@@ -133,7 +133,7 @@ class FootPlacement:
         ref = self.ref_pelvis[frame] - self.ref_ankle[frame, touching, :2].mean(axis=0)
         return ref - sim
 
-    def adjust(self, data, frame: int, q_ref) -> np.ndarray:
+    def adjust(self, data, frame: int, q_ref, gain: float | None = None) -> np.ndarray:
         """Shift the swing hip's angles in ``q_ref`` (in place) for the current state.
 
         Parameters
@@ -144,6 +144,8 @@ class FootPlacement:
         frame : int
             The reference frame of the step.
         q_ref : ndarray, shape (nq,)
+        gain : float, optional
+            This step's gain (default the placement's own).
 
         Returns
         -------
@@ -164,7 +166,7 @@ class FootPlacement:
         sim_offset = (com[:2] - data.xpos[self.ankle[stance], :2]) + tc * vel[:2]
         ref_offset = ((self.ref_com[frame, :2] - self.ref_ankle[frame, stance, :2])
                       + tc * self.ref_com_vel[frame, :2])
-        shift = self.gain * (sim_offset - ref_offset)
+        shift = (self.gain if gain is None else gain) * (sim_offset - ref_offset)
         norm = float(np.linalg.norm(shift))
         if norm > MAX_SHIFT_M:
             shift *= MAX_SHIFT_M / norm
