@@ -2,21 +2,33 @@
 
 At every physics step (``mj_step1``, control, ``mj_step2``) the controller
 
-1. takes the reference at the step's time (hinges and root position interpolated linearly
-   between frames, the root quaternion by normalised linear interpolation; velocities and
-   accelerations from central differences of the 12 Hz low-passed reference,
-   :func:`controller.dynamics.finite_differences`, interpolated the same way);
-2. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` with ``e`` the difference
-   between the reference and the state (``mj_differentiatePos``): the hinges and the root's
-   orientation and height stiffly, the root's horizontal position not at all (only its
-   velocity: the character may drift from the reference's path, and the drift is reported
-   as ``root_drift_m`` rather than fought);
-3. solves whole-body inverse dynamics with the floor contacts of the step in friction
-   pyramids and no force on the root (:class:`controller.wbc.WholeBodyID`);
-4. applies the joint torques, clipped to each joint's strength (the actuators'
-   ``forcerange``), through torque actuators: the model is used with its position servos
-   turned into torque motors of the same strength (:func:`torque_model`). The root has no
-   actuator and ``xfrc_applied`` is never written.
+1. takes the reference at the step's time: the 12 Hz low-passed reference (mocap
+   glitches such as 16_15's left arm, missing for its first 2 frames, are not targets),
+   re-anchored in height so that its first frame's lowest point is 1 mm into the floor
+   (mocap feet hover by centimetres); hinges and root position interpolated linearly
+   between frames, the root quaternion by normalised linear interpolation, velocities and
+   accelerations from central differences (:func:`controller.dynamics.finite_differences`);
+   hinge targets kept 2 degrees inside each joint's range (the limits' forces are not in
+   the plan);
+2. moves the swing foot (:mod:`controller.placement`): by the swing hip, towards where
+   the capture offset says it should land, and, by hip and knee, no lower than the
+   reference's swing ankle;
+3. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` (clipped to
+   :data:`MAX_ACCELERATION`) with ``e`` the difference between the target and the state
+   (``mj_differentiatePos``): the hinges and the root's orientation and height stiffly, the
+   root's horizontal position not at all, only its velocity (the character may drift from
+   the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
+4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
+   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`);
+5. applies the joint torques through torque actuators: the model is used with its position
+   servos turned into torque motors of the same strength (:func:`torque_model`). The root
+   has no actuator and ``xfrc_applied`` is never written.
+
+Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
+:data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
+copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
+reference's height and upright: the controller's balance is thin (which walks it gets
+through changes with the gain), and the rollouts pick, at about 4 times the cost.
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run. The controller has no
