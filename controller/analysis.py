@@ -48,7 +48,8 @@ def settings(tracking_modes=(), controller: str = "balance") -> dict:
             "free_controller_method": (
                 "whole-body inverse-dynamics QP per physics step (floor contacts in "
                 "friction pyramids, no root force, joint strength limits), torque "
-                "actuators, swing-foot placement; controller.balance"
+                "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
+                "every 0.5 s; controller.balance"
                 if controller == "balance" else "position servos alone (open loop)"),
             "body_error": "mean distance of the joint centres from the reference's, each "
                           "relative to its pelvis and heading (drift reported apart)",
