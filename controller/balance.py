@@ -76,8 +76,6 @@ DAMPING_RATIO = 1.0
 #: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
 #: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.
 MAX_ACCELERATION = 300.0
-#: Horizontal stiffness of the pelvis over the supporting feet (1/s^2), re-anchored.
-SUPPORT_KP = 0.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
 #: Foot-placement gains chosen among by short rollouts (one entry: no selection) ...
@@ -400,8 +398,6 @@ class _Control:
         if PLACEMENT:
             self.placement.adjust(data, frame, q_ref, gain)
         mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
-        if SUPPORT_KP:
-            err[:2] = self.placement.support_offset_error(data, frame)
         qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
         np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
         tau, _, _ = self.solver.solve(
@@ -618,7 +614,7 @@ def _gains(nv: int):
     kp[6:], kd[6:] = pd(JOINT_HZ)
     kp[3:6], kd[3:6] = pd(ROOT_ROTATION_HZ)
     kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
-    kp[:2], kd[:2] = SUPPORT_KP, ROOT_HORIZONTAL_DAMPING
+    kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
     return kp, kd
 
 

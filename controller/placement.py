@@ -81,14 +81,12 @@ class FootPlacement:
         n = reference_qpos.shape[0]
         self.ref_com = np.empty((n, 3))
         self.ref_ankle = np.empty((n, 2, 3))
-        self.ref_pelvis = np.empty((n, 2))
         for t in range(n):
             data.qpos[:] = reference_qpos[t]
             mujoco.mj_kinematics(model, data)
             mujoco.mj_comPos(model, data)
             self.ref_com[t] = data.subtree_com[1]
             self.ref_ankle[t] = data.xpos[self.ankle]
-            self.ref_pelvis[t] = data.xpos[1, :2]
         self.ref_com_vel = np.gradient(self.ref_com, 1.0 / fps, axis=0)
         # the reference's feet on the floor: slow and low (mocap contact detection)
         speed = np.linalg.norm(np.gradient(self.ref_ankle, 1.0 / fps, axis=0), axis=2)
@@ -121,17 +119,6 @@ class FootPlacement:
                 if b in self.foot_bodies[side]:
                     out[side] = True
         return out
-
-    def support_offset_error(self, data, frame: int) -> np.ndarray:
-        """The reference's minus the character's horizontal offset of the pelvis from the
-        feet that touch the floor (their mean ankle position), shape (2,); zero in flight.
-        """
-        touching = self._touching(data)
-        if not touching.any():
-            return np.zeros(2)
-        sim = data.xpos[1, :2] - data.xpos[self.ankle[touching], :2].mean(axis=0)
-        ref = self.ref_pelvis[frame] - self.ref_ankle[frame, touching, :2].mean(axis=0)
-        return ref - sim
 
     def adjust(self, data, frame: int, q_ref, gain: float | None = None) -> np.ndarray:
         """Shift the swing hip's angles in ``q_ref`` (in place) for the current state.
