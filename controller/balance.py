@@ -236,6 +236,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.falls import fallen, reference_heights
     from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
+    from controller.pose_error import reference_errors
     from controller.qpos import free_joint, joint_layout
     from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.wbc import WholeBodyID
@@ -533,56 +534,6 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
     }
 
 
-def reference_errors(model, qpos, reference_qpos):
-    """Per-frame errors of a simulated trajectory against its reference.
-
-    Parameters
-    ----------
-    model : mujoco.MjModel
-    qpos, reference_qpos : ndarray, shape (T, nq)
-        Rows of ``qpos`` that are NaN give NaN.
-
-    Returns
-    -------
-    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m : ndarray, shape (T,)
-        As defined in the module docstring.
-    """
-    import mujoco
-
-    from controller.qpos import joint_layout
-
-    layout = joint_layout(model)
-    hinge = layout.qpos_address
-    n = qpos.shape[0]
-    joint = np.full(n, np.nan)
-    body = np.full(n, np.nan)
-    drift = np.full(n, np.nan)
-    com = np.full(n, np.nan)
-    data = mujoco.MjData(model)
-    pelvis = 1
-    for t in range(n):
-        if not np.all(np.isfinite(qpos[t])):
-            continue
-        d = np.mod(qpos[t, hinge] - reference_qpos[t, hinge] + np.pi, 2 * np.pi) - np.pi
-        joint[t] = np.rad2deg(np.sqrt(np.mean(d ** 2)))
-        poses = []
-        for q in (qpos[t], reference_qpos[t]):
-            data.qpos[:] = q
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_comPos(model, data)
-            x = data.xpos[1:] - data.xpos[pelvis]
-            heading = _heading(data.xmat[pelvis].reshape(3, 3))
-            c, s = math.cos(-heading), math.sin(-heading)
-            rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-            poses.append((x @ rot.T, data.xpos[pelvis, :2].copy(),
-                          float(data.subtree_com[pelvis, 2])))
-        (sim_x, sim_xy, sim_com), (ref_x, ref_xy, ref_com) = poses
-        body[t] = 1000.0 * float(np.mean(np.linalg.norm(sim_x - ref_x, axis=1)))
-        drift[t] = float(np.linalg.norm(sim_xy - ref_xy))
-        com[t] = sim_com - ref_com
-    return joint, body, drift, com
-
-
 def floor_clearance(model, data, qpos) -> float:
     """Signed distance from the floor to the body's lowest point in state ``qpos``,
     metres (negative: in the floor)."""
@@ -596,12 +547,6 @@ def floor_clearance(model, data, qpos) -> float:
         raise ValueError("the model needs exactly one floor plane")
     return min(mujoco.mj_geomDistance(model, data, floor[0], g, 1.0, None)
                for g in range(model.ngeom) if model.geom_bodyid[g] != 0)
-
-
-def _heading(rotation) -> float:
-    """Heading of a body frame about the vertical: the angle of its x axis in the floor
-    plane."""
-    return math.atan2(rotation[1, 0], rotation[0, 0])
 
 
 def _gains(nv: int):
