@@ -115,3 +115,30 @@ def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(model02):
     whole = window_summary(run, 0, qpos.shape[0])
     assert whole["fell"] == 1.0 and whole["fall_time_s"] == pytest.approx(run.fall_time_s)
     assert np.isfinite(whole["joint_error_deg_rms"])
+
+
+def test_pose_errors_leave_drift_and_heading_apart(model02, walk_qpos):
+    from scipy.spatial.transform import Rotation
+
+    from controller.pose_error import reference_errors
+
+    ref = walk_qpos[:3]
+    same = reference_errors(model02, ref, ref)
+    for values in same:
+        np.testing.assert_allclose(values, 0.0, atol=1e-9)
+    moved = ref.copy()
+    moved[:, :2] += [0.3, 0.4]  # drift only
+    turn = Rotation.from_euler("z", 30, degrees=True)
+    for t in range(3):  # and a heading change about the vertical through the pelvis
+        w, x, y, z = moved[t, 3:7]
+        moved[t, 3:7] = np.roll((turn * Rotation.from_quat([x, y, z, w])).as_quat(), 1)
+    joint, body, drift, com = reference_errors(model02, moved, ref)
+    np.testing.assert_allclose(drift, 0.5, atol=1e-9)
+    np.testing.assert_allclose(body, 0.0, atol=1e-6)
+    np.testing.assert_allclose(joint, 0.0, atol=1e-9)
+    np.testing.assert_allclose(com, 0.0, atol=1e-9)
+    bent = ref.copy()
+    knee = joint_layout(model02).names.index("ltibia.rx")
+    bent[:, joint_layout(model02).qpos_address[knee]] += np.deg2rad(20)
+    joint, body, drift, com = reference_errors(model02, bent, ref)
+    assert np.all(joint > 0) and np.all(body > 5.0) and np.all(drift == 0)
