@@ -12,7 +12,11 @@ WINDOW_LEAD_S = 0.5
 WINDOW_TAIL_S = 0.5
 
 
-def settings(tracking_modes=()) -> dict:
+#: Free-root controllers: the balance controller, or the position servos alone.
+CONTROLLERS = ("balance", "servo")
+
+
+def settings(tracking_modes=(), controller: str = "balance") -> dict:
     """The thresholds and methods of the checks, JSON-ready (units in the names)."""
     from controller.contacts import SELF_COLLISION_DEPTH_M
     from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
@@ -40,6 +44,15 @@ def settings(tracking_modes=()) -> dict:
             "servo_targets": "reference hinge angles, linearly interpolated, taken kv/kp "
                              "ahead (a velocity reference for the damping)",
             "driven_root": "free joint qpos/qvel set from the reference before every step",
+            "free_controller": controller,
+            "free_controller_method": (
+                "whole-body inverse-dynamics QP per physics step (floor contacts in "
+                "friction pyramids, no root force, joint strength limits), torque "
+                "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
+                "every 0.5 s; controller.balance"
+                if controller == "balance" else "position servos alone (open loop)"),
+            "body_error": "mean distance of the joint centres from the reference's, each "
+                          "relative to its pelvis and heading (drift reported apart)",
             "window_free_lead_s": WINDOW_LEAD_S,
             "window_free_tail_s": WINDOW_TAIL_S,
         }
@@ -65,8 +78,24 @@ def motion_description(model, motion, model_path=None) -> dict:
     }
 
 
+def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False):
+    """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller``: a
+    :class:`controller.balance_report.BalanceTracking` or a
+    :class:`controller.tracking.Tracking`."""
+    from controller.balance_report import balance_tracking
+    from controller.tracking import track_qpos
+
+    if controller not in CONTROLLERS:
+        raise ValueError(f"unknown controller {controller!r} (controllers: "
+                         f"{', '.join(CONTROLLERS)})")
+    if controller == "balance":
+        return balance_tracking(model, qpos, fps, progress=progress)
+    return track_qpos(model, qpos, fps, "free")
+
+
 def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
-                     tail_s: float = WINDOW_TAIL_S) -> list[dict]:
+                     tail_s: float = WINDOW_TAIL_S, controller: str = "balance",
+                     progress: bool = False) -> list[dict]:
     """Per window, a free-root simulation from the reference state ``lead_s`` before the
     window to ``tail_s`` after it: does the character get through it standing?
 
@@ -77,34 +106,35 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
         "fall_in_window", "error_deg_rms" (window frames, before any fall), ...}}``.
     """
     from controller.qpos import to_qpos
-    from controller.tracking import track_qpos
+    from upm.progress import progress as progress_bar
 
     qpos = to_qpos(model, motion)
     n = motion.n_frames
     out = []
-    for window in windows:
+    for window in progress_bar(windows, desc="window runs", unit="window",
+                               disable=None if progress else True):
         w0, w1, _ = window.indices(n)
         a = max(0, w0 - round(lead_s * motion.fps))
         b = min(n, w1 + round(tail_s * motion.fps))
-        run = track_qpos(model, qpos[a:b], motion.fps, "free")
+        run = free_run(model, qpos[a:b], motion.fps, controller)
         inside = slice(w0 - a, w1 - a)
-        fall = None if run.fall_frame is None else a + run.fall_frame
+        fall_frame = run.run.fall_frame if controller == "balance" else run.fall_frame
+        fall = None if fall_frame is None else a + fall_frame
         summary = run.summary(inside)
-        out.append({"free_window": {
-            "start": a, "stop": b, "fell": run.fell, "fall_frame": fall,
-            "fall_in_window": fall is not None and fall < w1,
-            "error_deg_rms": summary["error_deg_rms"],
-            "limit_active_frames": summary["limit_active_frames"],
-            "self_collision_frames": summary["self_collision_frames"],
+        entry = {
+            "start": a, "stop": b, "controller": controller, "fell": fall is not None,
+            "fall_frame": fall, "fall_in_window": fall is not None and fall < w1,
             "diverged_frame": None if run.diverged_frame is None else a + run.diverged_frame,
             "warnings": run.warnings,
-        }})
+        }
+        entry.update({k: v for k, v in summary.items() if k not in ("frames", "fell")})
+        out.append({"free_window": entry})
     return out
 
 
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
-            model_path=None):
+            model_path=None, controller: str = "balance", progress: bool = False):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -127,6 +157,10 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
         Also a free-root run around each window (:func:`window_free_runs`).
     model_path : path-like, optional
         For the report's description.
+    controller : str
+        The free-root controller (:data:`CONTROLLERS`): ``"balance"`` or ``"servo"``.
+    progress : bool
+        Progress bars for the simulations.
 
     Returns
     -------
@@ -144,11 +178,15 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     windows = tuple(windows)
     validity = check_motion(model, motion, windows)
     residual = root_residual(model, to_qpos(model, motion), motion.fps) if dynamics else None
-    tracking = {mode: track(model, motion, mode) for mode in tracking_modes}
-    per_window = (window_free_runs(model, motion, windows)
+    tracking = {mode: (free_run(model, to_qpos(model, motion), motion.fps, controller,
+                                progress) if mode == "free" else track(model, motion, mode))
+                for mode in tracking_modes}
+    per_window = (window_free_runs(model, motion, windows, controller=controller,
+                                   progress=progress)
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
-                          settings=settings(tuple(tracking_modes)), residual=residual,
+                          settings=settings(tuple(tracking_modes), controller),
+                          residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)
     return report, {"validity": validity, "residual": residual, "tracking": tracking}

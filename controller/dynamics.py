@@ -303,11 +303,11 @@ def _needed_and_contacts(model, qpos, qvel, qacc, support_distance_m: float):
     """
     import mujoco
 
-    from controller.qpos import joint_layout
+    from controller.qpos import free_joint, joint_layout
 
     layout = joint_layout(model)
     root_dofs = slice(layout.free_dof, layout.free_dof + 6)
-    root_body = int(model.jnt_bodyid[_free_joint(model)])
+    root_body = int(model.jnt_bodyid[free_joint(model)])
     floor = np.flatnonzero(model.geom_bodyid == 0)
     geom_body = model.geom_bodyid
     n = qpos.shape[0]
@@ -349,15 +349,6 @@ def _needed_and_contacts(model, qpos, qvel, qacc, support_distance_m: float):
     sign = np.concatenate(signs)[:, None]
     return needed, (np.concatenate(frames), np.concatenate(arms), sign * frame9[:, 0],
                     frame9[:, 1], frame9[:, 2])
-
-
-def _free_joint(model) -> int:
-    import mujoco
-
-    free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
-    if free.size != 1:
-        raise ValueError("the model needs exactly one free (root) joint")
-    return int(free[0])
 
 
 def raw_inverse_with_contacts(model, qpos, fps: float,

@@ -67,19 +67,16 @@ def joint_layout(model) -> JointLayout:
     Raises
     ------
     ValueError
-        If a hinge is not named after a posture DOF, or there is no free root joint.
+        If a hinge is not named after a posture DOF, or there is not exactly one free
+        root joint.
     """
     import mujoco
 
     posture_index, qpos_address, dof_address, ranges, names = [], [], [], [], []
-    free_qpos = free_dof = -1
+    free = free_joint(model)
     for j in range(model.njnt):
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
-        jtype = model.jnt_type[j]
-        if jtype == mujoco.mjtJoint.mjJNT_FREE:
-            free_qpos, free_dof = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
-            continue
-        if jtype != mujoco.mjtJoint.mjJNT_HINGE:
+        if model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE:
             continue
         dof_name = name.replace("_", ".", 1) if name else ""
         # Bone names have no underscore; "lfemur_rx" -> "lfemur.rx".
@@ -90,13 +87,33 @@ def joint_layout(model) -> JointLayout:
         dof_address.append(int(model.jnt_dofadr[j]))
         ranges.append(np.rad2deg(model.jnt_range[j]))
         names.append(dof_name)
-    if free_qpos < 0:
-        raise ValueError("the model has no free root joint")
     return JointLayout(posture_index=np.array(posture_index, dtype=int),
                        qpos_address=np.array(qpos_address, dtype=int),
                        dof_address=np.array(dof_address, dtype=int),
                        range_deg=np.array(ranges, dtype=float).reshape(-1, 2),
-                       free_qpos=free_qpos, free_dof=free_dof, names=tuple(names))
+                       free_qpos=int(model.jnt_qposadr[free]),
+                       free_dof=int(model.jnt_dofadr[free]), names=tuple(names))
+
+
+def wrap_rad(x):
+    """Angles wrapped to [-pi, pi)."""
+    return np.mod(np.asarray(x) + np.pi, 2 * np.pi) - np.pi
+
+
+def free_joint(model) -> int:
+    """The id of the model's one free (root) joint.
+
+    Raises
+    ------
+    ValueError
+        If the model has no free joint or more than one.
+    """
+    import mujoco
+
+    free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
+    if free.size != 1:
+        raise ValueError("the model needs exactly one free (root) joint")
+    return int(free[0])
 
 
 def _joint_map(model) -> tuple[np.ndarray, np.ndarray, int]:

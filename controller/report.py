@@ -5,7 +5,7 @@ The JSON document (``schema`` = :data:`SCHEMA`, ``schema_version`` =
 :data:`SCHEMA_VERSION`)::
 
     {
-      "schema": "upm-controller/validity", "schema_version": 1,
+      "schema": "upm-controller/validity", "schema_version": 2,
       "kind": "check" | "simulate",
       "motion": {name, frames, fps, seconds, skeleton, model, mass_kg, stature_m, ...},
       "settings": {thresholds and methods, with units in their names},
@@ -16,6 +16,14 @@ The JSON document (``schema`` = :data:`SCHEMA`, ``schema_version`` =
       "frames": [{"frame", "time_s", "window", "valid", ..., "residual_force_bw", ...,
                   "free_error_deg", "driven_error_deg", ...}]
     }
+
+Version 2: the free-root tracking is by default the balance controller
+(``controller.balance``; ``settings.tracking.free_controller``), and its part figures
+(totals, windows, pieces, and each window's own ``free_window`` run) add to ``fell``,
+``fall_time_s`` and ``error_deg_rms``: ``body_error_mm_mean``/``_peak``, ``root_drift_m``,
+``com_height_error_m``, ``contact_force_peak_bw``/``_mean_bw``, ``torque_peak_nm``/
+``_mean_nm``, ``torque_saturation_share``, ``wall_s_per_sim_s`` and
+``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents).
 
 Frame numbers are 0-based frames of the (joined) motion; a window is the half-open
 frame range ``start:stop``; a frame's ``window`` is the index of the window it lies in
@@ -41,7 +49,7 @@ from controller.validity import Validity, frame_records, summarize
 
 SCHEMA = "upm-controller/validity"
 #: Bumped whenever a field changes meaning or is removed.
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 
 def build_report(kind: str, validity: Validity, *, motion: dict | None = None,

@@ -82,6 +82,12 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys, monkeypatch):
         (["--sequence", "02_01@0:50", "--method", "linear", "--viewer"], "needs a display"),
         (["--sequence", "02_01@0:50", "--method", "linear", "--modes", "free",
           "--render", "driven"], "--render driven needs"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--modes", "driven",
+          "--amc", "s.amc"], "need the free-root run"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--controller", "servo",
+          "--control", "c.npz"], "--control records the balance controller"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--amc", "s.bvh"],
+         "--amc s.bvh"),
     ]:
         assert main(["simulate", *base, *args]) == 2, args
         err = capsys.readouterr().err
@@ -109,3 +115,73 @@ def test_simulate_with_the_uniform_posture_map(tmp_path, data_dir, capsys):
     assert "free" not in report["totals"]["tracking"]
     assert "free_window" not in window.get("tracking", {})
     assert report["pieces"][0]["tracking"]["driven"]["error_deg_rms"] < 2.0
+
+
+def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, catalog, capsys):
+    """The free-root run balances through the linear window between two walks; the AMC of
+    what it did reads back on the skeleton, and the recorded torques replay to it."""
+    # (a run stops 1 s after a fall: the AMC and the control cover the frames simulated)
+    import numpy as np
+
+    from controller import to_qpos
+    from controller.balance import BalanceRun, replay
+    from humanoid_xml import catalog_model_path, load_model
+    from upm.amc import read_amc
+
+    out = tmp_path / "free.json"
+    assert main(["simulate", "--data", str(data_dir), "--method", "linear", "--frames", "20",
+                 "--sequence", "02_01@0:90", "02_02@30:100", "--modes", "free",
+                 "--no-window-runs", "--report", str(out), "--amc", str(tmp_path / "s.amc"),
+                 "--control", str(tmp_path / "c.npz")]) == 0
+    printed = capsys.readouterr().out
+    report = json.loads(out.read_text())
+    assert report["schema_version"] == 2
+    assert report["settings"]["tracking"]["free_controller"] == "balance"
+    free = report["totals"]["tracking"]["free"]
+    assert free["controller"] == "balance"
+    assert ("free root (balance): " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
+                                        else "does not fall")) in printed
+    # through the window and most of the second walk it stays up (measured: it walks the
+    # window, then falls at 1.4 s, 0.5 s into 02_02)
+    (window,) = report["windows"]
+    assert not window["tracking"]["free"]["fell"]
+    assert window["tracking"]["free"]["error_deg_rms"] < 8.0
+    assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
+    for key in ("error_deg_rms", "body_error_mm_mean", "root_drift_m", "com_height_error_m",
+                "contact_force_peak_bw", "torque_peak_nm", "torque_saturation_share",
+                "wall_s_per_sim_s", "raw_steps_per_step"):
+        assert free[key] is not None and free[key] >= 0, key
+    simulated_frames = (180 if not free["fell"]
+                        else min(180, free["fall_frame"] + 1 + 120))  # 1 s after a fall
+
+    model = load_model(catalog_model_path(catalog, "02_01"))
+    simulated = read_amc(tmp_path / "s.amc", catalog.skeleton("02"), fps=120.0)
+    assert simulated.n_frames == simulated_frames
+    with np.load(tmp_path / "c.npz", allow_pickle=False) as control:
+        substeps = int(control["substeps"])
+        assert control["ctrl"].shape == ((simulated_frames - 1) * substeps, model.nu)
+        run = BalanceRun(
+            fps=120.0, timestep_s=float(control["timestep_s"]), substeps=substeps, seed=0,
+            start_qpos=control["start_qpos"], start_qvel=control["start_qvel"],
+            qpos=np.zeros((simulated_frames, model.nq)), ctrl=control["ctrl"], fell=False,
+            fall_frame=None, fall_time_s=None, diverged_frame=None,
+            **{k: None for k in ("joint_error_deg", "body_error_mm", "root_drift_m",
+                                 "com_height_error_m", "contact_force_n", "torque_nm",
+                                 "torque_saturated", "limit_rows", "self_contacts",
+                                 "warnings", "external_force_peak", "weight_n", "wall_s",
+                                 "sim_s", "raw_step_s")})
+    replayed = replay(model, run)
+    # the AMC holds what the character did: the replay of its torques, to the AMC's
+    # printed precision
+    np.testing.assert_allclose(to_qpos(model, simulated)[:, 7:], replayed[:, 7:], atol=1e-6)
+    np.testing.assert_allclose(to_qpos(model, simulated)[:, :3], replayed[:, :3], atol=1e-6)
+
+
+def test_servo_controller_is_still_available(tmp_path, data_dir):
+    out = tmp_path / "servo.json"
+    assert main(["simulate", "--data", str(data_dir), "--method", "linear", "--frames", "20",
+                 "--sequence", "02_01@0:90", "02_02@30:100", "--modes", "free",
+                 "--controller", "servo", "--no-window-runs", "--report", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert report["settings"]["tracking"]["free_controller"] == "servo"
+    assert "body_error_mm_mean" not in report["totals"]["tracking"]["free"]

@@ -10,6 +10,10 @@
   against a bare loop that feeds ``mj_step`` the same inputs (the plan's targets, and the
   driven root's state) with none of the per-step bookkeeping (limit rows, samples,
   warnings) — the same physics, so the ratio is the cost of the measuring;
+- the balance controller (:func:`controller.balance.follow`, root free) in simulated
+  seconds per wall second, against a bare ``mj_step`` loop replaying the torques it
+  applied on the same torque-actuated model (the same physics without the control): the
+  ratio is what the whole-body QP costs, in raw ``mj_step`` equivalents per step;
 - (full run only) the kinematic checks of every frame of every clip, reading included.
 """
 
@@ -88,6 +92,7 @@ def run(context: BenchContext) -> dict:
         out[f"tracking_{mode}_steps_per_s"] = result.steps_per_s
         out[f"reference_mj_step_{mode}_per_s"] = plan.steps / raw_s
         out[f"tracking_{mode}_ratio_to_raw"] = result.steps_per_s / (plan.steps / raw_s)
+    out.update(_balance(model, qpos, motion.fps, repeat=2 if context.quick else 3))
     if not context.quick:
         from controller.validity import calibrate
         from upm.catalog import Catalog
@@ -100,6 +105,37 @@ def run(context: BenchContext) -> dict:
         out["calibration_frames"] = frames
         out["calibration_frames_per_s"] = frames / seconds
     return out
+
+
+def _balance(model, qpos, fps: float, repeat: int) -> dict:
+    """The balance controller's speed against raw ``mj_step`` on the same steps."""
+    import mujoco
+
+    from controller.balance import follow, torque_model
+
+    run = min((follow(model, qpos, fps) for _ in range(repeat)), key=lambda r: r.wall_s)
+    sim = torque_model(model)
+    sim.opt.timestep = run.timestep_s
+    data = mujoco.MjData(sim)
+
+    def raw_steps():
+        mujoco.mj_resetData(sim, data)
+        data.qpos[:] = run.start_qpos
+        data.qvel[:] = run.start_qvel
+        for k in range(run.steps):
+            data.ctrl[:] = run.ctrl[k]
+            mujoco.mj_step(sim, data)
+
+    raw_s = timeit_best(raw_steps, repeat=repeat)
+    return {
+        "balance_steps": run.steps,
+        "balance_fell": run.fell,
+        "balance_sim_s_per_wall_s": run.sim_s / run.wall_s,
+        "balance_wall_s_per_sim_s": run.wall_s / run.sim_s,
+        "reference_mj_step_balance_per_s": run.steps / raw_s,
+        "balance_ratio_to_raw": (run.sim_s / run.wall_s) / (run.sim_s / raw_s),
+        "balance_raw_steps_per_step": run.wall_s / raw_s,
+    }
 
 
 def _reset(plan, data) -> None:

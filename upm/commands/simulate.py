@@ -9,14 +9,22 @@ need --map). The humanoid of the first piece's subject then
     window's two end postures already have), self-collision, floor penetration;
   - needs an external force beyond what floor contact can supply (inverse dynamics, in
     body weights): the "hand of god" the motion asks for;
-  - follows it with its position servos, root driven along the sequence ("driven") and
-    root free on the floor ("free"): joint tracking error, joint-limit activity,
-    self-contacts, and whether and when it falls; plus, per window, a free-root run from
-    0.5 s before the window to 0.5 s after it.
+  - follows it with the root driven along the sequence ("driven": position servos) and
+    with the root free on the floor ("free"): by default the balance controller (a
+    whole-body inverse-dynamics QP at every physics step with the floor contacts, no
+    force on the root, the joints' strength limits, and swing-foot placement), or with
+    --controller servo the position servos alone (which fall within 0.5-1.4 s). Reported:
+    joint error, body-position error, root drift, centre-of-mass height error, contact
+    forces, joint torques and their saturation, whether and when it falls, and the
+    controller's cost; plus, per window, a free-root run from 0.5 s before the window to
+    0.5 s after it.
 
 --report writes the JSON report (per frame, per window, per piece, totals) and a CSV
 summary beside it. --video renders offscreen (no GPU needed: OSMesa) an .mp4, a .gif, or
-a .png filmstrip of the whole sequence; --filmstrip a PNG of the frames around each
+a .png filmstrip of the whole sequence; --amc writes what the free-root character
+actually did as an AMC on the subject's skeleton, --control the torques the balance
+controller applied at every physics step (.npz: replayable open-loop with
+controller.balance.replay); --filmstrip a PNG of the frames around each
 window; --viewer plays it in MuJoCo's viewer where there is a display.
 
 Example:
@@ -45,6 +53,16 @@ def configure(parser) -> None:
     parser.add_argument("--modes", nargs="+", choices=["driven", "free"],
                         default=["driven", "free"],
                         help="tracking simulations to run (default: both)")
+    parser.add_argument("--controller", choices=["balance", "servo"], default="balance",
+                        help="the free-root controller: the balance controller (default) "
+                             "or the position servos alone")
+    parser.add_argument("--amc", metavar="S.amc", default=None,
+                        help="write the free-root simulated motion as AMC (needs free in "
+                             "--modes)")
+    parser.add_argument("--control", metavar="C.npz", default=None,
+                        help="write the balance controller's applied torques per physics "
+                             "step, with its start state (needs free and --controller "
+                             "balance)")
     parser.add_argument("--no-window-runs", dest="window_runs", action="store_false",
                         help="skip the free-root run around each window")
     parser.add_argument("--video", metavar="V.mp4", default=None,
@@ -77,6 +95,15 @@ def run(args) -> int:
     from upm.commands.transition import sequence_from_args
     from upm.errors import UsageError
 
+    if (args.amc or args.control) and "free" not in args.modes:
+        raise UsageError("--amc and --control need the free-root run: add free to --modes")
+    if args.control and args.controller != "balance":
+        raise UsageError("--control records the balance controller: use --controller "
+                         "balance")
+    if args.amc and not args.amc.lower().endswith(".amc"):
+        raise UsageError(f"--amc {args.amc}: use a name ending in .amc")
+    if args.control and not args.control.lower().endswith(".npz"):
+        raise UsageError(f"--control {args.control}: use a name ending in .npz")
     render = args.render or args.modes[0]
     if render != "reference" and render not in args.modes:
         raise UsageError(f"--render {render} needs that simulation: add it to --modes")
@@ -100,7 +127,7 @@ def run(args) -> int:
         model, motion, kind="simulate", windows=sequence.windows, window_meta=window_meta,
         pieces=[(str(ref), part) for ref, part in zip(refs, sequence.pieces, strict=True)],
         tracking_modes=tuple(args.modes), window_free=args.window_runs,
-        model_path=model_path)
+        model_path=model_path, controller=args.controller, progress=True)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
                           "map": args.map, "align_heading": args.align_heading}
@@ -112,6 +139,12 @@ def run(args) -> int:
                           + (f", stopped at frame {run_.diverged_frame}"
                              if run_.diverged_frame is not None else ""), stacklevel=1)
     _print_summary(report, json_path, csv_path)
+    if args.amc or args.control:
+        free = results["tracking"]["free"]
+        if args.amc:
+            print(f"simulated motion: {_write_simulated_amc(model, free.qpos, motion, args.amc)}")
+        if args.control:
+            print(f"control: {_write_control(free.run, args.control)}")
 
     trajectory = (to_qpos(model, motion) if render == "reference"
                   else results["tracking"][render].qpos)
@@ -131,6 +164,32 @@ def run(args) -> int:
     if args.viewer:
         play_in_viewer(model, trajectory, motion.fps)
     return 0
+
+
+def _write_simulated_amc(model, qpos, motion, path):
+    """The simulated frames (up to where the run stopped) as an AMC on the skeleton."""
+    import numpy as np
+
+    from controller.qpos import from_qpos
+    from upm.amc import write_amc
+
+    simulated = qpos[np.isfinite(qpos).all(axis=1)]
+    write_amc(path, from_qpos(model, simulated, motion.skeleton, motion.fps,
+                              name=f"{motion.name} simulated"))
+    return path
+
+
+def _write_control(run, path):
+    """The balance run's control and start state, for controller.balance.replay."""
+    import numpy as np
+
+    from upm.fileio import atomic_path
+
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        np.savez(handle, ctrl=run.ctrl, start_qpos=run.start_qpos,
+                 start_qvel=run.start_qvel, timestep_s=run.timestep_s,
+                 substeps=run.substeps, fps=run.fps)
+    return path
 
 
 def _print_summary(report: dict, json_path, csv_path) -> None:
@@ -158,6 +217,13 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
         print(line)
     free = report["totals"].get("tracking", {}).get("free")
     if free is not None:
-        print("  free root: " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
-                                 else "does not fall"))
+        line = "  free root" + (f" ({free['controller']})" if "controller" in free else "")
+        line += ": " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
+                        else "does not fall")
+        if free.get("body_error_mm_mean") is not None:
+            line += (f", joint error {free['error_deg_rms']:.1f} deg RMS, body error "
+                     f"{free['body_error_mm_mean']:.0f} mm mean, root drift "
+                     f"{free['root_drift_m']:.2f} m, {free['wall_s_per_sim_s']:.2f} wall s "
+                     "per simulated s")
+        print(line)
     print(f"report: {json_path} (summary {csv_path})")

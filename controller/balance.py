@@ -1,0 +1,588 @@
+"""A free-root character that keeps its balance while following a reference motion.
+
+At every physics step (``mj_step1``, control, ``mj_step2``) the controller
+
+1. takes the reference at the step's time: the 12 Hz low-passed reference (mocap
+   glitches such as 16_15's left arm, missing for its first 2 frames, are not targets),
+   re-anchored in height so that its first frame's lowest point is 1 mm into the floor
+   (mocap feet hover by centimetres); hinges and root position interpolated linearly
+   between frames, the root quaternion by normalised linear interpolation, velocities and
+   accelerations from central differences (:func:`controller.dynamics.finite_differences`);
+   hinge targets kept 2 degrees inside each joint's range (the limits' forces are not in
+   the plan);
+2. moves the swing foot (:mod:`controller.placement`): by the swing hip, towards where
+   the capture offset says it should land, and, by hip and knee, no lower than the
+   reference's swing ankle;
+3. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` (clipped to
+   :data:`MAX_ACCELERATION`) with ``e`` the difference between the target and the state
+   (``mj_differentiatePos``): the hinges and the root's orientation and height stiffly, the
+   root's horizontal position not at all, only its velocity (the character may drift from
+   the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
+4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
+   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`);
+5. applies the joint torques through torque actuators: the model is used with its position
+   servos turned into torque motors of the same strength (:func:`torque_model`). The root
+   has no actuator and ``xfrc_applied`` is never written.
+
+Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
+:data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
+copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
+reference's height and upright: the controller's balance is thin (which walks it gets
+through changes with the gain), and the rollouts pick, at about 4 times the cost.
+
+The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
+runs them open-loop from the same start and reproduces the run. The controller has no
+randomness: the ``seed`` is recorded, and the same inputs give the same run.
+
+Per-frame figures (``BalanceRun``):
+
+- ``joint_error_deg``: RMS over the hinges of the simulated minus the reference angle,
+  wrapped to [-180, 180);
+- ``body_error_mm``: mean over the bodies (every joint centre: the proximal end of each
+  bone, the distal end of its parent) of the distance between the simulated and the
+  reference position, each taken relative to its own root (pelvis) position and turned
+  about the vertical by its own root heading: pose error, without the root's drift or
+  heading drift (tilt counts);
+- ``root_drift_m``: horizontal distance between the simulated and the reference pelvis;
+- ``com_height_error_m``: simulated minus reference centre-of-mass height;
+- ``contact_force_n``: total normal force of the floor on the body;
+- ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
+  step, and whether the controller asked for more than the joint's strength.
+
+The character has **fallen** when its pelvis or head is below half its standing height
+while the reference's is not (:mod:`controller.falls`); the simulation then
+runs :data:`AFTER_FALL_S` more and stops (later frames are NaN).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Seconds simulated after a fall before the run stops.
+AFTER_FALL_S = 1.0
+#: The start's lowest point is this far into the floor (a contact from the first step).
+START_DEPTH_M = 0.001
+#: Natural frequencies of the tracking (Hz) and damping ratio.
+JOINT_HZ = 5.0
+ROOT_ROTATION_HZ = 3.0
+ROOT_HEIGHT_HZ = 2.0
+ROOT_HORIZONTAL_DAMPING = 10.0
+DAMPING_RATIO = 1.0
+#: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
+#: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.
+MAX_ACCELERATION = 300.0
+#: Targets are kept this far inside each hinge's range, degrees.
+LIMIT_MARGIN_DEG = 2.0
+#: Foot-placement gains chosen among by short rollouts (one entry: no selection) ...
+SELECT_GAINS = (0.3, 0.6)
+#: ... every this many seconds ...
+SELECT_EVERY_S = 0.5
+#: ... each rolled out this far ahead.
+LOOKAHEAD_S = 1.0
+#: Floor contacts of a foot the reference has in the air are not planned as support.
+SWING_EXCLUDE = False
+#: Correct the swing foot's placement (:mod:`controller.placement`).
+PLACEMENT = True
+
+WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
+               "body_error_mm_peak", "root_drift_m", "com_height_error_m",
+               "torque_saturation_share", "contact_force_peak_bw", "torque_peak_nm",
+               "wall_s_per_sim_s")
+
+
+@dataclass(frozen=True, eq=False)
+class BalanceRun:
+    """One free-root run of the balance controller.
+
+    Attributes
+    ----------
+    fps : float
+    timestep_s : float
+        The physics step.
+    substeps : int
+        Physics steps per frame.
+    seed : int
+    start_qpos, start_qvel : ndarray, shape (nq,), (nv,)
+        The first state.
+    qpos : ndarray, shape (T, nq)
+        The simulated state at each frame (NaN after the run stopped).
+    ctrl : ndarray, shape (S, nu)
+        The torque applied at every physics step (actuator order), N m.
+    fell : bool
+    fall_frame : int or None
+    fall_time_s : float or None
+        From the run's start.
+    diverged_frame : int or None
+        Frame at which the state became non-finite (the run stopped).
+    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m, contact_force_n :
+        ndarray, shape (T,)
+    torque_nm : ndarray, shape (T, nu)
+    torque_saturated : ndarray of bool, shape (T, nu)
+    limit_rows, self_contacts : ndarray of int, shape (T,)
+        Active joint-limit constraint rows and self-contacts at each frame.
+    warnings : dict of str to int
+        MuJoCo's warning counters that are not zero.
+    external_force_peak : float
+        The largest ``|xfrc_applied|`` component seen at any frame (zero: nothing but
+        the joints' torques, gravity and contacts moved the body).
+    weight_n : float
+        The body's weight.
+    wall_s : float
+        Wall-clock seconds of the stepping loop.
+    sim_s : float
+        Simulated seconds.
+    raw_step_s : float
+        Wall seconds of one raw ``mj_step`` of the same model, timed in the same run.
+    """
+
+    fps: float
+    timestep_s: float
+    substeps: int
+    seed: int
+    start_qpos: np.ndarray
+    start_qvel: np.ndarray
+    qpos: np.ndarray
+    ctrl: np.ndarray
+    fell: bool
+    fall_frame: int | None
+    fall_time_s: float | None
+    diverged_frame: int | None
+    joint_error_deg: np.ndarray
+    body_error_mm: np.ndarray
+    root_drift_m: np.ndarray
+    com_height_error_m: np.ndarray
+    contact_force_n: np.ndarray
+    torque_nm: np.ndarray
+    torque_saturated: np.ndarray
+    limit_rows: np.ndarray
+    self_contacts: np.ndarray
+    warnings: dict
+    external_force_peak: float
+    weight_n: float
+    wall_s: float
+    sim_s: float
+    raw_step_s: float
+
+    @property
+    def steps(self) -> int:
+        return self.ctrl.shape[0]
+
+    @property
+    def n_frames(self) -> int:
+        return self.qpos.shape[0]
+
+    @property
+    def wall_s_per_sim_s(self) -> float:
+        return self.wall_s / self.sim_s if self.sim_s > 0 else math.nan
+
+    @property
+    def raw_steps_per_step(self) -> float:
+        """The controller's cost per physics step in raw ``mj_step`` equivalents."""
+        return (self.wall_s / self.steps / self.raw_step_s
+                if self.steps and self.raw_step_s > 0 else math.nan)
+
+
+def torque_model(model):
+    """A copy of the humanoid whose position servos are torque motors of the same strength.
+
+    Each actuator's force becomes its control (gain 1, no bias), still clamped to the
+    actuator's ``forcerange``; the control is not limited otherwise.
+    """
+    sim = copy.deepcopy(model)
+    sim.actuator_gainprm[:] = 0.0
+    sim.actuator_gainprm[:, 0] = 1.0
+    sim.actuator_biasprm[:] = 0.0
+    sim.actuator_biastype[:] = 0
+    sim.actuator_ctrllimited[:] = 0
+    return sim
+
+
+def _torque_range(model) -> np.ndarray:
+    """Each actuator's torque range, shape (nu, 2) (``forcerange``; unlimited: inf)."""
+    limited = model.actuator_forcelimited.astype(bool)[:, None]
+    return np.where(limited, model.actuator_forcerange, np.array([-np.inf, np.inf]))
+
+
+def follow(model, reference_qpos, fps: float, *, seed: int = 0,
+           progress: bool = False) -> BalanceRun:
+    """Simulate the free-root humanoid balancing while it follows a reference.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        A humanoid made by :mod:`humanoid_xml` (not modified).
+    reference_qpos : array_like, shape (T, nq), T >= 2
+        From :func:`controller.to_qpos`.
+    fps : float
+        Frames per second of the reference.
+    seed : int
+        Recorded; the controller is deterministic.
+    progress : bool
+        Show a progress bar (tqdm, off when not a terminal).
+
+    Returns
+    -------
+    BalanceRun
+    """
+    import mujoco
+
+    from controller.body import body_figures
+    from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
+    from controller.falls import fallen, reference_heights
+    from controller.mjwarnings import collected_warnings, fatal, warning_counts
+    from controller.placement import FootPlacement
+    from controller.pose_error import reference_errors
+    from controller.qpos import free_joint, joint_layout
+    from controller.tracking import MAX_STEP_S, physics_substeps
+    from controller.wbc import WholeBodyID
+    from upm.progress import progress as progress_bar
+
+    ref = unwrap_hinges(model, reference_qpos)
+    n_frames = ref.shape[0]
+    if n_frames < 2:
+        raise ValueError("following needs a reference of at least 2 frames")
+    if not np.all(np.isfinite(ref)):
+        raise ValueError("the reference has non-finite values")
+    sim = torque_model(model)
+    substeps = physics_substeps(fps, min(MAX_STEP_S, float(model.opt.timestep)))
+    dt = 1.0 / (fps * substeps)
+    sim.opt.timestep = dt
+    nu = sim.nu
+    joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
+    torque_range = _torque_range(sim)
+    low_nm, high_nm = torque_range.T
+    solver = WholeBodyID(sim, joint_dofs, torque_range)
+
+    layout = joint_layout(sim)
+    margin = np.deg2rad(LIMIT_MARGIN_DEG)
+    low, high = np.deg2rad(layout.range_deg.T)
+    low, high = low + margin, high - margin
+    # Targets come from the low-passed reference (mocap glitches are not targets).
+    smooth = lowpass_qpos(sim, ref, fps)
+    data = mujoco.MjData(sim)
+    # Start with the lowest point on the floor (mocap feet hover or sink by centimetres),
+    # and re-anchor the reference's height by the same shift.
+    height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
+    ref[:, 2] += height_shift
+    smooth[:, 2] += height_shift
+    ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
+    start = smooth[0].copy()
+    start_qvel = ref_qvel[0].copy()
+    data.qpos[:] = start
+    data.qvel[:] = start_qvel
+    mujoco.mj_forward(sim, data)
+
+    placement = FootPlacement(sim, ref, fps)
+    control = _Control(sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
+                       (low, high), torque_range)
+    gain = placement.gain
+    pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
+    head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
+    figures = body_figures(model)
+    ref_pelvis, ref_head = reference_heights(sim, ref, pelvis_body, head_site)
+
+    total = (n_frames - 1) * substeps
+    ctrl = np.zeros((total, nu))
+    qpos = np.full((n_frames, sim.nq), np.nan)
+    contact = np.full(n_frames, np.nan)
+    torque = np.full((n_frames, nu), np.nan)
+    saturated = np.zeros((n_frames, nu), dtype=bool)
+    limit_rows = np.zeros(n_frames, dtype=int)
+    self_contacts = np.zeros(n_frames, dtype=int)
+    limit_type = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
+    qpos[0] = data.qpos
+    contact[0] = _floor_normal_force(sim, data)
+    torque[0] = 0.0
+    fall = None
+    stop_frame = n_frames
+    diverged = None
+    steps = 0
+    external = 0.0
+    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
+                if len(SELECT_GAINS) > 1 and PLACEMENT else None)
+    bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
+                       disable=None if progress else True)
+    clock = time.perf_counter()
+    with collected_warnings(), bar:
+        for t in range(1, n_frames):
+            if selector is not None and (t - 1) % selector.every_frames == 0:
+                gain = selector.choose(data, t - 1)
+            for k in range((t - 1) * substeps, t * substeps):
+                applied, tau = control.step(data, k, gain)
+                ctrl[k] = applied
+                steps += 1
+            saturated[t] = (tau < low_nm) | (tau > high_nm)
+            bar.update(1)
+            if fatal(data) or not np.all(np.isfinite(data.qpos)):
+                diverged = t
+                stop_frame = t
+                break
+            qpos[t] = data.qpos
+            contact[t] = _floor_normal_force(sim, data)
+            torque[t] = data.actuator_force
+            external = max(external, float(np.abs(data.xfrc_applied).max()))
+            limit_rows[t] = int(np.count_nonzero(data.efc_type[:data.nefc] == limit_type))
+            if data.ncon:
+                pairs = sim.geom_bodyid[np.asarray(data.contact.geom[:data.ncon])]
+                self_contacts[t] = int(np.count_nonzero((pairs[:, 0] != 0) & (pairs[:, 1] != 0)))
+            if fall is None:
+                if fallen(data.xpos[pelvis_body, 2], data.site_xpos[head_site, 2],
+                          ref_pelvis[t], ref_head[t], figures):
+                    fall = t
+                    stop_frame = min(n_frames, t + 1 + int(round(AFTER_FALL_S * fps)))
+            if t + 1 >= stop_frame:
+                break
+    wall = time.perf_counter() - clock
+    ctrl = ctrl[:steps]
+    saturated[stop_frame:] = False
+
+    joint_err, body_err, drift, com_err = reference_errors(sim, qpos, ref)
+    return BalanceRun(
+        fps=float(fps), timestep_s=dt, substeps=substeps, seed=int(seed),
+        start_qpos=start, start_qvel=start_qvel, qpos=qpos, ctrl=ctrl,
+        fell=fall is not None, fall_frame=fall,
+        fall_time_s=None if fall is None else fall / float(fps), diverged_frame=diverged,
+        joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
+        com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
+        torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
+        warnings=warning_counts(data),
+        external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
+        sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
+    )
+
+
+class _Control:
+    """One physics step of the controller: targets, foot placement, QP, torques."""
+
+    def __init__(self, sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
+                 target_range, torque_range):
+        from controller.qpos import joint_layout
+
+        self.sim, self.smooth = sim, smooth
+        self.ref_qvel, self.ref_qacc = ref_qvel, ref_qacc
+        self.substeps, self.solver, self.placement = substeps, solver, placement
+        self.n_frames = smooth.shape[0]
+        self.kp, self.kd = _gains(sim.nv)
+        layout = joint_layout(sim)
+        self.hinge_q, self.hinge_v = layout.qpos_address, layout.dof_address
+        self.low, self.high = target_range
+        self.low_nm, self.high_nm = np.asarray(torque_range).T
+        self.q_ref = np.empty(sim.nq)
+        self.err = np.zeros(sim.nv)
+
+    def step(self, data, k: int, gain: float):
+        """Control and take physics step ``k``; returns the applied and the planned
+        torques, (nu,) each."""
+        import mujoco
+
+        sim, n_frames, q_ref, err = self.sim, self.n_frames, self.q_ref, self.err
+        s = k / self.substeps
+        i = min(int(s), n_frames - 2)
+        w = s - i
+        _interpolate(self.smooth[i], self.smooth[i + 1], w, q_ref)
+        qd_ref = (1 - w) * self.ref_qvel[i] + w * self.ref_qvel[i + 1]
+        qdd_ref = (1 - w) * self.ref_qacc[i] + w * self.ref_qacc[i + 1]
+        mujoco.mj_step1(sim, data)
+        # targets inside the joint ranges: the limits' forces are not in the plan
+        hinge = q_ref[self.hinge_q]
+        clipped = (hinge < self.low) | (hinge > self.high)
+        if clipped.any():
+            q_ref[self.hinge_q] = np.clip(hinge, self.low, self.high)
+            qd_ref[self.hinge_v[clipped]] = 0.0
+            qdd_ref[self.hinge_v[clipped]] = 0.0
+        frame = min(int(round(s)), n_frames - 1)
+        if PLACEMENT:
+            self.placement.adjust(data, frame, q_ref, gain)
+        mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
+        qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
+        np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
+        tau, _, _ = self.solver.solve(
+            data, qdd_des,
+            exclude=self.placement.swing_bodies(frame) if SWING_EXCLUDE else ())
+        applied = np.clip(tau, self.low_nm, self.high_nm)
+        data.ctrl[:] = applied
+        mujoco.mj_step2(sim, data)
+        return applied, tau
+
+
+class _GainSelector:
+    """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
+    :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
+    pelvis nearest the reference's height and upright; the first on ties."""
+
+    def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int):
+        import mujoco
+
+        self.control = control
+        self.ref_pelvis = ref_pelvis
+        self.pelvis_body = pelvis_body
+        self.n_frames = n_frames
+        self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
+        self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
+        self.scratch = mujoco.MjData(control.sim)
+
+    def choose(self, data, frame: int) -> float:
+        import mujoco
+
+        control, sim, scratch = self.control, self.control.sim, self.scratch
+        last = min(self.n_frames - 1, frame + self.lookahead_frames)
+        best, best_cost = SELECT_GAINS[0], math.inf
+        for gain in SELECT_GAINS:
+            mujoco.mj_copyData(scratch, sim, data)
+            cost = 0.0
+            for t in range(frame + 1, last + 1):
+                for k in range((t - 1) * control.substeps, t * control.substeps):
+                    control.step(scratch, k, gain)
+                if not np.all(np.isfinite(scratch.qpos)):
+                    cost = math.inf
+                    break
+                low = self.ref_pelvis[t] - scratch.xpos[self.pelvis_body, 2]
+                tilt = 1.0 - scratch.xmat[self.pelvis_body, 8]
+                cost += max(0.0, low) + tilt
+            if cost < best_cost:
+                best, best_cost = gain, cost
+        return best
+
+
+def replay(model, run: BalanceRun) -> np.ndarray:
+    """Run a :class:`BalanceRun`'s recorded torques open-loop from its start.
+
+    Returns
+    -------
+    ndarray, shape (T, nq)
+        The state at every frame (NaN where the run had stopped).
+    """
+    import mujoco
+
+    sim = torque_model(model)
+    sim.opt.timestep = run.timestep_s
+    data = mujoco.MjData(sim)
+    data.qpos[:] = run.start_qpos
+    data.qvel[:] = run.start_qvel
+    mujoco.mj_forward(sim, data)
+    out = np.full_like(run.qpos, np.nan)
+    out[0] = data.qpos
+    for k in range(run.steps):
+        mujoco.mj_step1(sim, data)
+        data.ctrl[:] = run.ctrl[k]
+        mujoco.mj_step2(sim, data)
+        if (k + 1) % run.substeps == 0:
+            out[(k + 1) // run.substeps] = data.qpos
+    return out
+
+
+def raw_step_seconds(model, qpos, qvel, steps: int = 300) -> float:
+    """Wall seconds of one plain ``mj_step`` of the model from a state (servos holding
+    the state's pose), the unit of the controller's cost."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos
+    data.qvel[:] = qvel
+    data.ctrl[:] = qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]]
+    clock = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    return (time.perf_counter() - clock) / steps
+
+
+def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[str, float]:
+    """Figures of frames ``start_frame`` to ``stop_frame - 1`` of a run.
+
+    Errors, drift and forces are over the frames of the window before the fall (NaN when
+    there are none); ``fell`` is 1.0 when the character fell at or before the window's
+    last frame.
+
+    Returns
+    -------
+    dict of str to float
+        The keys of :data:`WINDOW_KEYS`.
+    """
+    n = run.n_frames
+    start, stop = max(0, int(start_frame)), min(n, int(stop_frame))
+    if stop <= start:
+        raise ValueError(f"empty window {start_frame}:{stop_frame} of a {n}-frame run")
+    index = np.arange(start, stop)
+    up = index[np.isfinite(run.qpos[index, 0])]
+    if run.fall_frame is not None:
+        up = up[up < run.fall_frame]
+    fell = run.fall_frame is not None and run.fall_frame <= stop - 1
+
+    def stat(values, how):
+        values = np.asarray(values, dtype=float)
+        values = values[np.isfinite(values)]
+        return float(how(values)) if values.size else math.nan
+
+    return {
+        "fell": 1.0 if fell else 0.0,
+        "fall_time_s": run.fall_time_s if fell else math.nan,
+        "joint_error_deg_rms": stat(run.joint_error_deg[up] ** 2,
+                                    lambda v: np.sqrt(np.mean(v))),
+        "body_error_mm_mean": stat(run.body_error_mm[up], np.mean),
+        "body_error_mm_peak": stat(run.body_error_mm[up], np.max),
+        "root_drift_m": stat(run.root_drift_m[up], np.max),
+        "com_height_error_m": stat(np.abs(run.com_height_error_m[up]), np.mean),
+        "torque_saturation_share": stat(run.torque_saturated[up].ravel(), np.mean),
+        "contact_force_peak_bw": stat(run.contact_force_n[up] / run.weight_n, np.max),
+        "torque_peak_nm": stat(np.abs(run.torque_nm[up]).ravel(), np.max),
+        "wall_s_per_sim_s": run.wall_s_per_sim_s,
+    }
+
+
+def floor_clearance(model, data, qpos) -> float:
+    """Signed distance from the floor to the body's lowest point in state ``qpos``,
+    metres (negative: in the floor)."""
+    import mujoco
+
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    floor = [g for g in range(model.ngeom)
+             if model.geom_bodyid[g] == 0 and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE]
+    if len(floor) != 1:
+        raise ValueError("the model needs exactly one floor plane")
+    return min(mujoco.mj_geomDistance(model, data, floor[0], g, 1.0, None)
+               for g in range(model.ngeom) if model.geom_bodyid[g] != 0)
+
+
+def _gains(nv: int):
+    def pd(hz):
+        w = 2 * math.pi * hz
+        return w * w, 2 * DAMPING_RATIO * w
+
+    kp = np.empty(nv)
+    kd = np.empty(nv)
+    kp[6:], kd[6:] = pd(JOINT_HZ)
+    kp[3:6], kd[3:6] = pd(ROOT_ROTATION_HZ)
+    kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
+    kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
+    return kp, kd
+
+
+def _interpolate(a, b, w: float, out) -> None:
+    """``out`` = qpos between two frames: linear, the root quaternion normalised
+    (same hemisphere)."""
+    np.multiply(a, 1 - w, out=out)
+    out += w * b
+    qa, qb = a[3:7], b[3:7]
+    quat = (1 - w) * qa + w * (qb if qa @ qb >= 0 else -qb)
+    out[3:7] = quat / np.linalg.norm(quat)
+
+
+def _floor_normal_force(model, data) -> float:
+    """Total normal force of the floor on the body, N."""
+    import mujoco
+
+    total = 0.0
+    force = np.zeros(6)
+    geom_body = model.geom_bodyid
+    for i in range(data.ncon):
+        g = data.contact.geom[i]
+        if (geom_body[g[0]] == 0) != (geom_body[g[1]] == 0):
+            mujoco.mj_contactForce(model, data, i, force)
+            total += force[0]
+    return total

@@ -1,0 +1,132 @@
+"""A balance-controller run (:class:`controller.balance.BalanceRun`) in the validity
+report's tracking section: the figures of :func:`controller.balance.window_summary` per
+part, and the old tracking fields (``fell``, ``fall_time_s``, ``error_deg_rms``) kept
+under their names."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: The figures of a part of a balance run in the report (besides ``frames``).
+PART_FIELDS = ("fell", "fall_time_s", "error_deg_rms", "body_error_mm_mean",
+               "body_error_mm_peak", "root_drift_m", "com_height_error_m",
+               "contact_force_peak_bw", "contact_force_mean_bw", "torque_peak_nm",
+               "torque_mean_nm", "torque_saturation_share", "wall_s_per_sim_s",
+               "raw_steps_per_step")
+
+
+class BalanceTracking:
+    """The report's view of a balance run (the interface of
+    :class:`controller.tracking.Tracking` that :mod:`controller.report` reads).
+
+    Parameters
+    ----------
+    run : controller.balance.BalanceRun
+    fall_rule : str
+        The fall rule in words, for the report.
+    """
+
+    mode = "free"
+    controller = "balance"
+
+    def __init__(self, run, fall_rule: str = ""):
+        self.run = run
+        self.fall_rule = fall_rule
+
+    @property
+    def qpos(self) -> np.ndarray:
+        return self.run.qpos
+
+    @property
+    def diverged_frame(self):
+        return self.run.diverged_frame
+
+    @property
+    def warnings(self) -> dict:
+        return self.run.warnings
+
+    @property
+    def error_deg(self) -> np.ndarray:
+        return self.run.joint_error_deg
+
+    @property
+    def limit_rows(self) -> np.ndarray:
+        return self.run.limit_rows
+
+    @property
+    def self_contacts(self) -> np.ndarray:
+        return self.run.self_contacts
+
+    @property
+    def fallen(self) -> np.ndarray:
+        out = np.zeros(self.run.n_frames, dtype=bool)
+        if self.run.fall_frame is not None:
+            out[self.run.fall_frame:] = True
+        return out
+
+    def summary(self, part: slice | None = None) -> dict:
+        """Figures over the frames of ``part`` (all by default), JSON-ready."""
+        from controller.balance import window_summary
+
+        start, stop, _ = (part or slice(None)).indices(self.run.n_frames)
+        if stop <= start:
+            return {"frames": 0}
+        w = window_summary(self.run, start, stop)
+        run = self.run
+        index = np.arange(start, stop)
+        up = index[np.isfinite(run.qpos[index, 0])]
+        if run.fall_frame is not None:
+            up = up[up < run.fall_frame]
+        contact = run.contact_force_n[up] / run.weight_n
+        torque = np.abs(run.torque_nm[up])
+        out = {
+            "frames": int(stop - start),
+            "fell": bool(w["fell"]),
+            "fall_time_s": w["fall_time_s"],
+            "error_deg_rms": w["joint_error_deg_rms"],
+            "body_error_mm_mean": w["body_error_mm_mean"],
+            "body_error_mm_peak": w["body_error_mm_peak"],
+            "root_drift_m": w["root_drift_m"],
+            "com_height_error_m": w["com_height_error_m"],
+            "contact_force_peak_bw": w["contact_force_peak_bw"],
+            "contact_force_mean_bw": float(np.mean(contact)) if up.size else math.nan,
+            "torque_peak_nm": w["torque_peak_nm"],
+            "torque_mean_nm": float(np.mean(torque)) if up.size else math.nan,
+            "torque_saturation_share": w["torque_saturation_share"],
+            "wall_s_per_sim_s": w["wall_s_per_sim_s"],
+            "raw_steps_per_step": run.raw_steps_per_step,
+        }
+        return {k: (round(v, 5) if isinstance(v, float) and math.isfinite(v) else v)
+                for k, v in out.items()}
+
+    def run_summary(self) -> dict:
+        """Whole-run figures, JSON-ready."""
+        run = self.run
+        return {
+            "mode": self.mode,
+            "controller": self.controller,
+            "timestep_s": run.timestep_s,
+            "steps": run.steps,
+            "seed": run.seed,
+            "fall_frame": run.fall_frame,
+            "fall_rule": self.fall_rule,
+            "diverged_frame": run.diverged_frame,
+            "warnings": dict(run.warnings),
+            "limit_active_frames": int((run.limit_rows > 0).sum()),
+            "self_contact_frames": int((run.self_contacts > 0).sum()),
+            "raw_step_s": run.raw_step_s,
+            **self.summary(),
+        }
+
+
+def balance_tracking(model, reference_qpos, fps: float, *, seed: int = 0,
+                     progress: bool = False) -> BalanceTracking:
+    """Run :func:`controller.balance.follow` and wrap it for the report."""
+    from controller.balance import follow
+    from controller.body import body_figures
+    from controller.falls import fall_rule
+
+    run = follow(model, reference_qpos, fps, seed=seed, progress=progress)
+    return BalanceTracking(run, fall_rule(body_figures(model)))

@@ -1,0 +1,180 @@
+"""Foot placement: where the swing foot should land for the body to stay balanced.
+
+Joint tracking and a whole-body QP keep the character's pose, but the horizontal motion of
+its centre of mass can only be corrected while a foot is on the floor by shifting the
+centre of pressure, which the ankles' strength allows over a few centimetres. Walking
+balance comes from where the next foot lands (SIMBICON, Yin et al. 2007; the capture
+point, Pratt et al. 2006). Here the swing foot is moved, relative to where the reference's
+joint angles put it, by the difference between the character's and the reference's
+*capture offset*: the centre of mass's horizontal offset from the stance foot plus its
+horizontal velocity times ``sqrt(h / g)`` (``h`` the centre of mass height). The shift is
+made by the swing hip's three hinges (the least-norm change that moves the ankle by it,
+from the ankle's Jacobian).
+
+A leg swings when none of its foot's bodies touch the floor while the other's do; with
+both feet down or both up nothing is changed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Share of the capture-offset difference the swing foot is moved by.
+PLACEMENT_GAIN = 0.3
+#: The largest shift of the swing foot, metres.
+MAX_SHIFT_M = 0.25
+#: A reference foot is down when its ankle moves slower than this ...
+FOOT_DOWN_SPEED_MPS = 0.8
+#: ... and is within this height of its lowest in the motion.
+FOOT_DOWN_HEIGHT_M = 0.08
+#: Also keep the swing ankle at least at the reference's height (hip and knee).
+SWING_HEIGHT = True
+_SIDES = ("l", "r")
+
+
+class FootPlacement:
+    """Swing-hip corrections for one model and reference.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    reference_qpos : ndarray, shape (T, nq)
+    fps : float
+    gain : float, optional
+        Default :data:`PLACEMENT_GAIN`.
+    """
+
+    def __init__(self, model, reference_qpos, fps: float, gain: float | None = None):
+        import mujoco
+
+        def body(name):
+            i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+            if i < 0:
+                raise ValueError(f"the model has no body {name!r}")
+            return i
+
+        self.model = model
+        self.gain = float(PLACEMENT_GAIN if gain is None else gain)
+        self.ankle = np.array([body(f"{s}foot") for s in _SIDES])
+        self.foot_bodies = [
+            {b for b in range(model.nbody) if _descends(model, b, body(f"{s}foot"))}
+            for s in _SIDES]
+        hips = []
+        for s in _SIDES:
+            dofs = [int(model.jnt_dofadr[j]) for j in range(model.njnt)
+                    if (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "")
+                    .startswith(f"{s}femur_")]
+            qadr = [int(model.jnt_qposadr[j]) for j in range(model.njnt)
+                    if (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "")
+                    .startswith(f"{s}femur_")]
+            if SWING_HEIGHT:
+                knee = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"{s}tibia_rx")
+                dofs.append(int(model.jnt_dofadr[knee]))
+                qadr.append(int(model.jnt_qposadr[knee]))
+            hips.append((np.array(dofs), np.array(qadr)))
+        self.hips = hips
+        self._jacp = np.zeros((3, model.nv))
+        # the reference's centre of mass, its velocity and the ankles, per frame
+        data = mujoco.MjData(model)
+        n = reference_qpos.shape[0]
+        self.ref_com = np.empty((n, 3))
+        self.ref_ankle = np.empty((n, 2, 3))
+        for t in range(n):
+            data.qpos[:] = reference_qpos[t]
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_comPos(model, data)
+            self.ref_com[t] = data.subtree_com[1]
+            self.ref_ankle[t] = data.xpos[self.ankle]
+        self.ref_com_vel = np.gradient(self.ref_com, 1.0 / fps, axis=0)
+        # the reference's feet on the floor: slow and low (mocap contact detection)
+        speed = np.linalg.norm(np.gradient(self.ref_ankle, 1.0 / fps, axis=0), axis=2)
+        height = self.ref_ankle[:, :, 2]
+        low = height < height.min(axis=0) + FOOT_DOWN_HEIGHT_M
+        self.ref_down = (speed < FOOT_DOWN_SPEED_MPS) & low  # (T, 2)
+        g = float(np.linalg.norm(model.opt.gravity))
+        self.time_constant_s = math.sqrt(max(float(np.median(self.ref_com[:, 2])), 0.1) / g)
+
+    def swing_bodies(self, frame: int) -> set:
+        """The bodies of the feet that the reference has in the air at a frame."""
+        out = set()
+        for side in range(2):
+            if not self.ref_down[frame, side]:
+                out |= self.foot_bodies[side]
+        return out
+
+    def _touching(self, data) -> np.ndarray:
+        """Whether each foot (left, right) touches the floor, bool (2,)."""
+        out = np.zeros(2, dtype=bool)
+        n = data.ncon
+        if not n:
+            return out
+        bodies = self.model.geom_bodyid[np.asarray(data.contact.geom[:n])]
+        for b0, b1 in bodies:
+            if (b0 == 0) == (b1 == 0):
+                continue
+            b = b1 if b0 == 0 else b0
+            for side in range(2):
+                if b in self.foot_bodies[side]:
+                    out[side] = True
+        return out
+
+    def adjust(self, data, frame: int, q_ref, gain: float | None = None) -> np.ndarray:
+        """Shift the swing hip's angles in ``q_ref`` (in place) for the current state.
+
+        Parameters
+        ----------
+        data : mujoco.MjData
+            After ``mj_step1`` (positions, centre of mass; velocities are read from
+            ``qvel``).
+        frame : int
+            The reference frame of the step.
+        q_ref : ndarray, shape (nq,)
+        gain : float, optional
+            This step's gain (default the placement's own).
+
+        Returns
+        -------
+        ndarray, shape (2,)
+            The horizontal shift asked of the swing foot (zero when no leg swings), m.
+        """
+        import mujoco
+
+        touching = self._touching(data)
+        if touching.all() or not touching.any():
+            return np.zeros(2)
+        swing = int(np.flatnonzero(~touching)[0])
+        stance = 1 - swing
+        mujoco.mj_subtreeVel(self.model, data)
+        com = data.subtree_com[1]
+        vel = data.subtree_linvel[1]
+        tc = self.time_constant_s
+        sim_offset = (com[:2] - data.xpos[self.ankle[stance], :2]) + tc * vel[:2]
+        ref_offset = ((self.ref_com[frame, :2] - self.ref_ankle[frame, stance, :2])
+                      + tc * self.ref_com_vel[frame, :2])
+        shift = (self.gain if gain is None else gain) * (sim_offset - ref_offset)
+        norm = float(np.linalg.norm(shift))
+        if norm > MAX_SHIFT_M:
+            shift *= MAX_SHIFT_M / norm
+        dofs, qadr = self.hips[swing]
+        mujoco.mj_jac(self.model, data, self._jacp, None, data.xpos[self.ankle[swing]],
+                      int(self.ankle[swing]))
+        if SWING_HEIGHT:
+            # and the ankle at the reference's height above the floor (not lower: a swing
+            # foot that lands early lands on its toes, behind the body)
+            lift = max(0.0, self.ref_ankle[frame, swing, 2] - data.xpos[self.ankle[swing], 2])
+            jac = self._jacp[:, dofs]
+            q_ref[qadr] += np.linalg.lstsq(jac, np.append(shift, lift), rcond=1e-3)[0]
+        else:
+            jac = self._jacp[:2, dofs]  # (2, 3)
+            q_ref[qadr] += np.linalg.lstsq(jac, shift, rcond=None)[0]
+        return shift
+
+
+def _descends(model, body: int, ancestor: int) -> bool:
+    while body > 0:
+        if body == ancestor:
+            return True
+        body = int(model.body_parentid[body])
+    return False

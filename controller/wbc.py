@@ -1,0 +1,213 @@
+"""Whole-body inverse dynamics with floor contact: the joint torques of one control step.
+
+Given the state (after ``mj_step1``: kinematics, inertia, bias forces, contacts) and the
+desired generalised acceleration ``qdd_des`` (nv,), find the acceleration ``qdd`` and the
+floor forces ``f`` that best satisfy, in weighted least squares,
+
+- ``qdd`` close to ``qdd_des`` (the root rows and the joint rows weighted separately);
+- every floor contact point kept from accelerating (``a_c = J_c qdd ~ -k v_c``, soft);
+- small forces and small torques relative to each joint's strength (regularisation);
+
+subject, exactly, to
+
+- the 6 unactuated root rows of ``M qdd + h = S^T tau + J_c^T f``: no force acts on the
+  root but gravity, inertia and the floor (``h`` = bias minus passive forces);
+- each contact force inside a linearised friction pyramid: ``f = sum_e lambda_e d_e``
+  with ``d_e = n +- mu t`` on 4 edges and ``lambda_e >= 0`` (the floor only pushes).
+
+- every joint torque ``tau = (M qdd + h - J_c^T f)_joints`` within the joint's strength
+  (the actuator's ``forcerange``): the ankles of these humanoids cannot hold the body's
+  weight far from the ankle, so the plan must not count on it.
+
+The root rows are solved for the root acceleration, which leaves a quadratic programme in
+the joint accelerations and the edge magnitudes (about 45 + 4 x contacts unknowns), solved
+by ``quadprog`` (Goldfarb-Idnani, dense).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import quadprog
+
+#: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
+CONTACT_DAMPING = 20.0
+#: Friction coefficient of the pyramid (below the model's 1.0, so planned forces stick).
+FRICTION = 0.8
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2)."""
+
+    root_rotation: float = 10.0
+    root_yaw: float = 1.0
+    root_height: float = 3.0
+    root_horizontal: float = 10.0
+    joints: float = 1.0
+    contact: float = 100.0
+    force: float = 1e-2
+    torque: float = 0.3
+    flight_root: float = 0.01
+
+
+class WholeBodyID:
+    """The per-step solver of one model (buffers allocated once).
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The simulated humanoid: one free joint at DOFs 0-5, then one hinge per actuator.
+    joint_dofs : ndarray of int, shape (nu,)
+        The DOF each actuator drives, in actuator order.
+    torque_range_nm : ndarray, shape (nu, 2)
+        Each actuator's torque range (its ``forcerange``: lower, upper).
+    weights : Weights
+    """
+
+    def __init__(self, model, joint_dofs, torque_range_nm, weights: Weights | None = None):
+        self.model = model
+        self.nv = int(model.nv)
+        self.joint_dofs = np.asarray(joint_dofs, dtype=int)
+        if sorted(self.joint_dofs.tolist()) != list(range(6, self.nv)):
+            raise ValueError("whole-body control needs the free joint at DOFs 0-5 and one "
+                             "actuator per hinge")
+        self.hinge_row = self.joint_dofs - 6  # actuator a drives hinge row hinge_row[a]
+        torque_range = np.asarray(torque_range_nm, dtype=float)
+        self.low = np.empty(self.nv - 6)
+        self.high = np.empty(self.nv - 6)
+        self.low[self.hinge_row] = torque_range[:, 0]
+        self.high[self.hinge_row] = torque_range[:, 1]
+        self.strength = np.maximum(-self.low, self.high)
+        self.w = weights or Weights()
+        self.mass = float(np.sum(model.body_mass[1:]))
+        self.weight_n = self.mass * float(np.linalg.norm(model.opt.gravity))
+        self.M = np.zeros((self.nv, self.nv))
+        self._jacp = np.zeros((3, self.nv))
+        mu = FRICTION
+        self.edges = np.array([[mu, 0, 1], [-mu, 0, 1], [0, mu, 1], [0, -mu, 1]], float)
+        self.edges /= np.linalg.norm(self.edges, axis=1, keepdims=True)
+        # root rotation rows are about the pelvis's own axes; its z axis is the body's up
+        root_w = np.array([self.w.root_horizontal] * 2 + [self.w.root_height]
+                          + [self.w.root_rotation] * 2 + [self.w.root_yaw])
+        self.root_w = root_w
+
+    def floor_contacts(self, data, exclude=()):
+        """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``,
+        without the contacts of the bodies in ``exclude``."""
+        n = data.ncon
+        if n == 0:
+            return np.zeros((0, 3)), np.zeros(0, dtype=int)
+        geoms = np.asarray(data.contact.geom[:n])
+        bodies = self.model.geom_bodyid[geoms]
+        floor = (bodies[:, 0] == 0) ^ (bodies[:, 1] == 0)
+        if not floor.any():
+            return np.zeros((0, 3)), np.zeros(0, dtype=int)
+        pts = np.asarray(data.contact.pos[:n])[floor]
+        body = np.where(bodies[floor, 0] == 0, bodies[floor, 1], bodies[floor, 0])
+        if exclude:
+            keep = np.array([b not in exclude for b in body], dtype=bool)
+            pts, body = pts[keep], body[keep]
+        return pts, body
+
+    def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=()):
+        """Torques for the current state.
+
+        Parameters
+        ----------
+        data : mujoco.MjData
+            After ``mj_step1`` (or ``mj_forward``).
+        qdd_des : ndarray, shape (nv,)
+        contact_damping : float
+            Desired contact-point acceleration ``-contact_damping * v_c``, 1/s.
+        exclude : set of int
+            Bodies whose floor contacts are not planned as support (a swing foot that
+            scrapes the floor: the floor still pushes it, the plan does not lean on it).
+
+        Returns
+        -------
+        tau : ndarray, shape (nu,)
+            Torques in actuator order (not clipped).
+        qdd : ndarray, shape (nv,)
+            The planned acceleration.
+        normal_n : float
+            The planned total normal force, N.
+        """
+        import mujoco
+
+        if contact_damping is None:
+            contact_damping = CONTACT_DAMPING
+        model, nv, w = self.model, self.nv, self.w
+        M = self.M
+        mujoco.mj_fullM(model, data, M)
+        h = np.asarray(data.qfrc_bias) - np.asarray(data.qfrc_passive)
+        pts, bodies = self.floor_contacts(data, exclude)
+        nc = pts.shape[0]
+        Jc = np.empty((3 * nc, nv))
+        for i in range(nc):
+            mujoco.mj_jac(model, data, self._jacp, None, pts[i], int(bodies[i]))
+            Jc[3 * i:3 * i + 3] = self._jacp
+        # generalised force of unit edge magnitudes (scaled by body weight): (nv, 4 nc)
+        if nc:
+            Jl = np.concatenate([self.edges @ Jc[3 * i:3 * i + 3] for i in range(nc)]).T
+            Jl *= self.weight_n
+        else:
+            Jl = np.zeros((nv, 0))
+        nl = Jl.shape[1]
+        nj = nv - 6
+        # root rows: M_rr qdd_r + M_rj qdd_j + h_r = Jl_r lam
+        Mrr_inv = np.linalg.inv(M[:6, :6])
+        # qdd = G [qdd_j; lam] + g0
+        G = np.zeros((nv, nj + nl))
+        G[:6, :nj] = -Mrr_inv @ M[:6, 6:]
+        G[:6, nj:] = Mrr_inv @ Jl[:6]
+        G[6:, :nj] = np.eye(nj)
+        g0 = np.zeros(nv)
+        g0[:6] = -Mrr_inv @ h[:6]
+
+        rows, rhs = [], []
+        # Without floor contact nothing but the limbs' reaction turns the root: asking for
+        # a root acceleration would only fling the limbs.
+        root_w = self.root_w if nc else self.root_w * w.flight_root
+        rows.append(root_w[:, None] * G[:6])
+        rhs.append(root_w * (qdd_des[:6] - g0[:6]))
+        rows.append(w.joints * G[6:])
+        rhs.append(w.joints * qdd_des[6:])
+        if nc:
+            vc = Jc @ np.asarray(data.qvel)
+            rows.append(w.contact * (Jc @ G))
+            rhs.append(w.contact * (-contact_damping * vc - Jc @ g0))
+            reg = np.zeros((nl, nj + nl))
+            reg[:, nj:] = w.force * np.eye(nl)
+            rows.append(reg)
+            rhs.append(np.zeros(nl))
+        # joint torques tau_j = (M G x + M g0 + h - Jl lam)_j, relative to strength
+        T = M[6:] @ G
+        T[:, nj:] -= Jl[6:]
+        t0 = M[6:] @ g0 + h[6:]
+        scale = w.torque / self.strength
+        rows.append(scale[:, None] * T)
+        rhs.append(-scale * t0)
+        A = np.concatenate(rows)
+        b = np.concatenate(rhs)
+        n = nj + nl
+        P = A.T @ A
+        P[np.diag_indices(n)] += 1e-9
+        # inequalities C^T x >= d: lambda >= 0, -strength <= tau <= strength
+        C = np.zeros((n, nl + 2 * nj))
+        C[nj:, :nl] = np.eye(nl)
+        C[:, nl:nl + nj] = -T.T
+        C[:, nl + nj:] = T.T
+        d = np.concatenate([np.zeros(nl), t0 - self.high, self.low - t0])
+        try:
+            x = quadprog.solve_qp(P, A.T @ b, C, d, 0)[0]
+        except ValueError:  # numerically infeasible: least squares, forces clipped at 0
+            x = np.linalg.lstsq(A, b, rcond=None)[0]
+            x[nj:] = np.maximum(x[nj:], 0.0)
+        lam = x[nj:]
+        qdd = G @ x + g0
+        tau_hinge = T @ x + t0
+        tau = tau_hinge[self.hinge_row]
+        normal = float(np.sum(lam.reshape(-1, 4) @ self.edges[:, 2]) * self.weight_n) if nl else 0.0
+        return tau, qdd, normal
