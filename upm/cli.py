@@ -31,6 +31,7 @@ COMMANDS: dict[str, str] = {
     "check": "upm.commands.check",
     "simulate": "upm.commands.simulate",
     "eval": "upm.commands.eval",
+    "studio": "upm.commands.studio",
 }
 
 
