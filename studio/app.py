@@ -78,6 +78,17 @@ class Studio:
         self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
         self.server.initial_camera.position = (centre_m[0] + 3.5, centre_m[1] - 3.5, 2.2)
 
+    def set(self, **values) -> Scene:
+        """Set controls by name (``alpha=0.9``, ``method="snap"``...) and recompute.
+
+        The server-side API: tests and scripts drive the page through it, and every
+        connected browser sees the same controls move.
+        """
+        for name, value in values.items():
+            getattr(self, name).value = value
+        self.apply_gui()
+        return self.scene
+
     def apply_gui(self) -> None:
         """Copy the GUI's values into the session and recompute (what every control calls)."""
         s = self.session
