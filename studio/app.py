@@ -16,6 +16,11 @@ from studio.session import Scene, Session, capsule_geoms, method_names
 VALID_RGB = (170, 180, 200)
 INVALID_RGB = (220, 60, 50)
 GHOST_RGB = (90, 160, 90)
+#: The physics-check figures shown in the page (the full report: ``upm simulate``).
+REPORT_COLUMNS = ("part", "valid_pct", "limit_violation_pct", "self_collision_frames",
+                  "floor_penetration_frames", "added_limit_violation_frames",
+                  "residual_force_bw_peak", "residual_torque_bwh_peak", "driven_fell",
+                  "driven_error_deg_rms", "driven_torque_peak_nm")
 
 
 def _strip_rgb(valid, window: slice, height: int = 12) -> np.ndarray:
@@ -66,6 +71,15 @@ class Studio:
         self.frame = gui.add_slider("frame", 0, 1, 1, 0)
         self.status = gui.add_markdown("")
         self.strip = gui.add_image(np.zeros((12, 2, 3), np.uint8), label="valid frames")
+        self.dof = gui.add_text("Fig. 13 DOF", "rhumerus.rz")
+        self.curve = gui.add_image(np.full((8, 8, 3), 255, np.uint8), label="DOF vs linear")
+        self.amc_path = gui.add_text("export AMC to", "transition.amc")
+        export = gui.add_button("export AMC")
+        export.on_click(lambda _: self.export())
+        check = gui.add_button("physics check (upm simulate)")
+        check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
+        self.report = gui.add_markdown("")
+        self.dof.on_update(lambda _: self.refresh())
         for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
                        self.compare, self.alpha, self.frames):
             handle.on_update(lambda _: self.apply_gui())
@@ -121,6 +135,49 @@ class Studio:
                 f"valid; recomputed in {1e3 * scene.seconds:.0f} ms")
         self.show_frame(min(int(self.frame.value), n - 1))
         self.last_update_s = time.perf_counter() - start
+        self._draw_curve(scene)
+
+    def _draw_curve(self, scene: Scene) -> None:
+        """The Fig. 13 image (after the scene: it is not on the slider's critical path)."""
+        import tempfile
+        from pathlib import Path
+
+        import matplotlib.image
+
+        from studio.session import dof_curve_png
+
+        try:
+            linear = (scene.result if scene.result.method == "linear"
+                      else self.session.transition("linear"))
+            with tempfile.TemporaryDirectory() as tmp:
+                png = Path(tmp) / "dof.png"
+                dof_curve_png(scene.result, linear, png, self.dof.value or None)
+                rgb = matplotlib.image.imread(png)[..., :3]
+            self.curve.image = (rgb * 255).round().astype(np.uint8)
+        except Exception as error:  # a bad DOF name: say so in the page
+            self.status.content += f"  \n**Fig. 13:** {error}"
+
+    def export(self) -> str:
+        """Write the current transition as an AMC (BVH: once ``upm`` writes BVH)."""
+        from studio.session import export_amc
+
+        path = export_amc(self.scene.result, self.amc_path.value)
+        self.report.content = f"wrote {path}"
+        return path
+
+    def check(self) -> list[dict]:
+        """Run the physics check of the current transition and show its summary."""
+        from studio.session import physics_check
+
+        self.report.content = "physics check running..."
+        rows = physics_check(self.session.model, self.scene.result)
+        lines = []
+        for row in rows:
+            cells = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                              for k, v in row.items() if k in REPORT_COLUMNS)
+            lines.append(f"- {cells}")
+        self.report.content = "\n".join(lines)
+        return rows
 
     def show_frame(self, t: int) -> None:
         """Pose the capsules at frame ``t``, tinted red where the frame is invalid."""

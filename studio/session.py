@@ -134,3 +134,41 @@ def capsule_poses(model, qpos) -> tuple[np.ndarray, np.ndarray]:
         for g, gid in enumerate(geoms):
             mujoco.mju_mat2Quat(wxyz[t, g], data.geom_xmat[gid])
     return pos, wxyz
+
+
+def export_amc(result, path) -> str:
+    """Write the transition (clip 1 context, window, clip 2 context) as an AMC, atomically.
+
+    BVH export joins here once ``upm`` writes BVH (not yet: the studio offers AMC only).
+    """
+    from upm.amc import write_amc
+
+    write_amc(path, result.motion)
+    return str(path)
+
+
+def dof_curve_png(result, linear, path, dof: str | None = None) -> str:
+    """The paper's Fig. 13 for the window: one DOF, the method against linear.
+
+    Returns the DOF drawn (``dof``, or the one where the two differ most).
+    """
+    from eval.figures import plot_window_dof
+
+    return plot_window_dof(path, {result.method: result, "linear": linear}, dof=dof)
+
+
+def physics_check(model, result, tracking_modes=("driven",)) -> list[dict]:
+    """The ``upm simulate`` analysis of the transition (its window marked): summary rows.
+
+    Returns
+    -------
+    list of dict
+        :func:`controller.report.summary_rows` (``all``, ``window 0``).
+    """
+    from controller.analysis import analyse
+    from controller.report import summary_rows
+
+    report, _ = analyse(model, result.motion, kind="simulate", windows=[result.window],
+                        window_meta=[{"method": result.method}],
+                        tracking_modes=tuple(tracking_modes))
+    return summary_rows(report)

@@ -56,7 +56,7 @@ def _screenshot(url: str, out_path, user_dir) -> np.ndarray:
         [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
          "--no-first-run", "--disable-background-networking", "--disable-component-update",
          "--disable-sync", f"--user-data-dir={user_dir}", "--use-gl=swiftshader",
-         "--enable-unsafe-swiftshader", "--window-size=1280,800",
+         "--enable-unsafe-swiftshader", "--window-size=1400,1000",
          "--virtual-time-budget=8000", f"--screenshot={out_path}", url],
         check=True, capture_output=True, timeout=120)
     return (matplotlib.image.imread(out_path)[..., :3] * 255).round().astype(int)
@@ -109,3 +109,30 @@ def _free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         return sock.getsockname()[1]
+
+
+def test_export_and_physics_check_of_the_window(session, tmp_path):
+    from studio.session import export_amc, physics_check
+    from upm.amc import read_amc
+
+    result = session.transition()
+    path = export_amc(result, tmp_path / "t.amc")
+    back = read_amc(path, result.motion.skeleton)
+    assert back.n_frames == result.motion.n_frames
+    np.testing.assert_allclose(back.posture_deg, result.motion.posture_deg, atol=1e-3)
+    rows = physics_check(session.model, result)
+    window = next(r for r in rows if r["part"] == "window 0")
+    assert (window["start"], window["stop"]) == (result.window.start, result.window.stop)
+    assert window["method"] == result.method and "driven_error_deg_rms" in window
+
+
+def test_fig13_curve_is_drawn(session, tmp_path):
+    import matplotlib.image
+
+    from studio.session import dof_curve_png
+
+    result = session.transition()
+    linear = session.transition("linear")
+    assert dof_curve_png(result, linear, tmp_path / "c.png", "rhumerus.rz") == "rhumerus.rz"
+    rgb = matplotlib.image.imread(tmp_path / "c.png")[..., :3]
+    assert rgb.std() > 0.05
