@@ -32,6 +32,7 @@ COMMANDS: dict[str, str] = {
     "check": "upm.commands.check",
     "simulate": "upm.commands.simulate",
     "eval": "upm.commands.eval",
+    "studio": "upm.commands.studio",
 }
 
 

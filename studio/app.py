@@ -1,0 +1,212 @@
+"""The studio's web page: viser (a three.js client served from Python, no front-end build).
+
+The humanoid's capsules play clip 1 -> window -> clip 2 in a loop; the GUI changes clips,
+frames, method, alpha and window length, and every change recomputes at once.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+
+from studio.session import Scene, Session, capsule_geoms, method_names
+
+VALID_RGB = (170, 180, 200)
+INVALID_RGB = (220, 60, 50)
+GHOST_RGB = (90, 160, 90)
+#: The physics-check figures shown in the page (the full report: ``upm simulate``).
+REPORT_COLUMNS = ("part", "valid_pct", "limit_violation_pct", "self_collision_frames",
+                  "floor_penetration_frames", "added_limit_violation_frames",
+                  "residual_force_bw_peak", "residual_torque_bwh_peak", "driven_fell",
+                  "driven_error_deg_rms", "driven_torque_peak_nm")
+
+
+def _strip_rgb(valid, window: slice, height: int = 12) -> np.ndarray:
+    """A (height, T, 3) uint8 image: green valid / red invalid frames, the window darker."""
+    row = np.where(np.asarray(valid)[:, None], [60, 170, 80], [210, 50, 40]).astype(np.uint8)
+    img = np.repeat(row[None], height, axis=0)
+    img[: height // 3, window] = (40, 40, 40)
+    return img
+
+
+class Studio:
+    """A running studio: a viser server drawing a :class:`~studio.session.Session`."""
+
+    def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 8080):
+        import trimesh
+        import viser
+
+        self.session = session
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.port = self.server.get_port()
+        self.lock = threading.Lock()
+        model = session.model
+        self._capsules = []
+        self._ghosts = []
+        for gid in capsule_geoms(model):
+            radius_m, half_m = model.geom_size[gid, :2]
+            mesh = trimesh.creation.capsule(height=2 * half_m, radius=radius_m, count=[8, 8])
+            self._capsules.append(self.server.scene.add_mesh_simple(
+                f"/body/g{gid}", mesh.vertices, mesh.faces, color=VALID_RGB))
+            self._ghosts.append(self.server.scene.add_mesh_simple(
+                f"/ghost/g{gid}", mesh.vertices, mesh.faces, color=GHOST_RGB, opacity=0.35,
+                visible=False))
+        self.server.scene.add_grid("/floor", width=8.0, height=8.0, plane="xy")
+        gui = self.server.gui
+        clips = session.catalog.names() if hasattr(session.catalog, "names") else [
+            session.clip1, session.clip2]
+        self.clip1 = gui.add_dropdown("clip 1", clips, initial_value=session.clip1)
+        self.a_frame = gui.add_number("clip 1 ends at frame", session.a_frame, min=0, step=1)
+        self.clip2 = gui.add_dropdown("clip 2", clips, initial_value=session.clip2)
+        self.b_frame = gui.add_number("clip 2 starts at frame", session.b_frame, min=0, step=1)
+        methods = method_names()
+        self.method = gui.add_dropdown("method", methods, initial_value=session.method)
+        self.compare = gui.add_dropdown("ghost method", ["(none)", *methods],
+                                        initial_value="(none)")
+        self.alpha = gui.add_slider("alpha", 0.0, 1.0, 0.01, session.alpha)
+        self.frames = gui.add_slider("window frames", 2, 120, 1, session.frames)
+        self.playing = gui.add_checkbox("play", True)
+        self.frame = gui.add_slider("frame", 0, 1, 1, 0)
+        self.status = gui.add_markdown("")
+        self.strip = gui.add_image(np.zeros((12, 2, 3), np.uint8), label="valid frames")
+        self.dof = gui.add_text("Fig. 13 DOF", "rhumerus.rz")
+        self.curve = gui.add_image(np.full((8, 8, 3), 255, np.uint8), label="DOF vs linear")
+        self.amc_path = gui.add_text("export AMC to", "transition.amc")
+        export = gui.add_button("export AMC")
+        export.on_click(lambda _: self.export())
+        check = gui.add_button("physics check (upm simulate)")
+        check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
+        self.report = gui.add_markdown("")
+        self.dof.on_update(lambda _: self.refresh())
+        for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
+                       self.compare, self.alpha, self.frames):
+            handle.on_update(lambda _: self.apply_gui())
+        self.frame.on_update(lambda _: self.show_frame(int(self.frame.value)))
+        self.scene: Scene | None = None
+        self.ghost: Scene | None = None
+        self.last_update_s = float("nan")
+        self.apply_gui()
+        centre_m = self.scene.geom_pos_m[:, 0].mean(axis=0)
+        self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
+        self.server.initial_camera.position = (centre_m[0] + 3.5, centre_m[1] - 3.5, 2.2)
+
+    def set(self, **values) -> Scene:
+        """Set controls by name (``alpha=0.9``, ``method="snap"``...) and recompute.
+
+        The server-side API: tests and scripts drive the page through it, and every
+        connected browser sees the same controls move.
+        """
+        for name, value in values.items():
+            getattr(self, name).value = value
+        self.apply_gui()
+        return self.scene
+
+    def apply_gui(self) -> None:
+        """Copy the GUI's values into the session and recompute (what every control calls)."""
+        s = self.session
+        s.clip1, s.clip2 = self.clip1.value, self.clip2.value
+        s.a_frame, s.b_frame = int(self.a_frame.value), int(self.b_frame.value)
+        s.method, s.alpha, s.frames = self.method.value, float(self.alpha.value), int(
+            self.frames.value)
+        s.compare_method = None if self.compare.value == "(none)" else self.compare.value
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Recompute the transition (and the ghost) and redraw the current frame."""
+        start = time.perf_counter()
+        with self.lock:
+            try:
+                scene = self.session.recompute()
+                ghost = (self.session.recompute(self.session.compare_method)
+                         if self.session.compare_method else None)
+            except Exception as error:  # shown in the page, the server keeps running
+                self.status.content = f"**error:** {error}"
+                return
+            self.scene, self.ghost = scene, ghost
+            n = scene.geom_pos_m.shape[0]
+            self.frame.max = n - 1
+            w = scene.result.window
+            self.strip.image = _strip_rgb(scene.valid, w)
+            self.status.content = (
+                f"{scene.result.method}, alpha {self.session.alpha:.2f}: window frames "
+                f"{w.start}-{w.stop - 1}, {int(scene.valid[w].sum())}/{w.stop - w.start} "
+                f"valid; recomputed in {1e3 * scene.seconds:.0f} ms")
+        self.show_frame(min(int(self.frame.value), n - 1))
+        self.last_update_s = time.perf_counter() - start
+        self._draw_curve(scene)
+
+    def _draw_curve(self, scene: Scene) -> None:
+        """The Fig. 13 image (after the scene: it is not on the slider's critical path)."""
+        import tempfile
+        from pathlib import Path
+
+        import matplotlib.image
+
+        from studio.session import dof_curve_png
+
+        try:
+            linear = (scene.result if scene.result.method == "linear"
+                      else self.session.transition("linear"))
+            with tempfile.TemporaryDirectory() as tmp:
+                png = Path(tmp) / "dof.png"
+                dof_curve_png(scene.result, linear, png, self.dof.value or None)
+                rgb = matplotlib.image.imread(png)[..., :3]
+            self.curve.image = (rgb * 255).round().astype(np.uint8)
+        except Exception as error:  # a bad DOF name: say so in the page
+            self.status.content += f"  \n**Fig. 13:** {error}"
+
+    def export(self) -> str:
+        """Write the current transition as an AMC (BVH: once ``upm`` writes BVH)."""
+        from studio.session import export_amc
+
+        path = export_amc(self.scene.result, self.amc_path.value)
+        self.report.content = f"wrote {path}"
+        return path
+
+    def check(self) -> list[dict]:
+        """Run the physics check of the current transition and show its summary."""
+        from studio.session import physics_check
+
+        self.report.content = "physics check running..."
+        rows = physics_check(self.session.model, self.scene.result)
+        lines = []
+        for row in rows:
+            cells = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                              for k, v in row.items() if k in REPORT_COLUMNS)
+            lines.append(f"- {cells}")
+        self.report.content = "\n".join(lines)
+        return rows
+
+    def show_frame(self, t: int) -> None:
+        """Pose the capsules at frame ``t``, tinted red where the frame is invalid."""
+        scene, ghost = self.scene, self.ghost
+        if scene is None:
+            return
+        color = VALID_RGB if scene.valid[t] else INVALID_RGB
+        with self.server.atomic():
+            for g, handle in enumerate(self._capsules):
+                handle.position = scene.geom_pos_m[t, g]
+                handle.wxyz = scene.geom_wxyz[t, g]
+                handle.color = color
+            for g, handle in enumerate(self._ghosts):
+                handle.visible = ghost is not None
+                if ghost is not None:
+                    tg = min(t, ghost.geom_pos_m.shape[0] - 1)
+                    handle.position = ghost.geom_pos_m[tg, g]
+                    handle.wxyz = ghost.geom_wxyz[tg, g]
+
+    def play_forever(self) -> None:
+        """Loop the motion at its frame rate while "play" is ticked."""
+        while True:
+            scene = self.scene
+            fps = scene.result.motion.fps if scene is not None else 30.0
+            time.sleep(1.0 / fps)
+            if scene is not None and self.playing.value:
+                t = (int(self.frame.value) + 1) % scene.geom_pos_m.shape[0]
+                self.frame.value = t
+
+    def stop(self) -> None:
+        """Shut the web server down."""
+        self.server.stop()

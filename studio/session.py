@@ -1,0 +1,174 @@
+"""The studio's state and its recomputation: clip 1 -> window -> clip 2 as capsule poses.
+
+No web code here, so tests (and any other front end) drive it directly.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def method_names() -> list[str]:
+    """Every registered transition method (the one adapter to the method registry)."""
+    from upm.transitions import METHODS
+
+    return list(METHODS)
+
+
+def key_source(method: str, map_path, catalog):
+    """The key-posture source a method needs (None for those that need none)."""
+    from upm.transitions.load import key_source_for
+
+    return key_source_for(method, map_path, catalog)
+
+
+@dataclass
+class Scene:
+    """One recomputed transition, ready to draw.
+
+    Attributes
+    ----------
+    result : upm.transitions.Transition
+    geom_pos_m : (T, G, 3) array, world positions of the G capsules per frame.
+    geom_wxyz : (T, G, 4) array, their orientations as unit quaternions.
+    valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision).
+    seconds : float, wall time of the whole recomputation (transition + kinematics + checks).
+    """
+
+    result: object
+    geom_pos_m: np.ndarray
+    geom_wxyz: np.ndarray
+    valid: np.ndarray
+    seconds: float
+
+
+class Session:
+    """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``."""
+
+    def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60):
+        from humanoid_xml import catalog_model_path, load_model
+
+        self.catalog = catalog
+        self.map_path = map_path
+        self.context = context
+        self.clip1, self.clip2 = clip1, clip2
+        self.a_frame = catalog.load(clip1).n_frames - 1
+        self.b_frame = 0
+        self.method = "linear"
+        self.compare_method: str | None = None
+        self.alpha = 0.5
+        self.frames = 20
+        self.model = load_model(catalog_model_path(catalog, clip1))
+        self._sources: dict[str, object] = {}
+
+    def _source(self, method: str):
+        if method not in self._sources:
+            self._sources[method] = key_source(method, self.map_path, self.catalog)
+        return self._sources[method]
+
+    def _pieces(self):
+        from upm.errors import UsageError
+
+        m1, m2 = self.catalog.load(self.clip1), self.catalog.load(self.clip2)
+        if not 0 <= self.a_frame < m1.n_frames or not 0 <= self.b_frame < m2.n_frames:
+            raise UsageError(f"frame out of range: {self.clip1}@{self.a_frame} "
+                             f"({m1.n_frames} frames), {self.clip2}@{self.b_frame} "
+                             f"({m2.n_frames} frames)")
+        before = m1.frames(max(0, self.a_frame + 1 - self.context), self.a_frame + 1)
+        after = m2.frames(self.b_frame, min(m2.n_frames, self.b_frame + self.context))
+        return before, after
+
+    def transition(self, method: str | None = None):
+        """The current transition (``method`` defaults to the session's)."""
+        from upm.transitions import transition
+
+        method = method or self.method
+        before, after = self._pieces()
+        return transition(method, before, after, self.frames, self.alpha, self._source(method))
+
+    def recompute(self, method: str | None = None) -> Scene:
+        """Transition, capsule poses and per-frame validity of the current settings."""
+        from controller.qpos import to_qpos
+        from controller.validity import check_motion
+
+        start = time.perf_counter()
+        result = self.transition(method)
+        pos, wxyz = capsule_poses(self.model, to_qpos(self.model, result.motion))
+        valid = check_motion(self.model, result.motion, [result.window]).valid
+        return Scene(result, pos, wxyz, np.asarray(valid, bool), time.perf_counter() - start)
+
+
+def capsule_geoms(model) -> np.ndarray:
+    """Indices of the model's capsule geoms (the body; the floor is left out)."""
+    import mujoco
+
+    return np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE)
+
+
+def capsule_poses(model, qpos) -> tuple[np.ndarray, np.ndarray]:
+    """World pose of every capsule at every frame.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    qpos : (T, nq) array
+
+    Returns
+    -------
+    pos_m : (T, G, 3) array
+    wxyz : (T, G, 4) array
+    """
+    import mujoco
+
+    geoms = capsule_geoms(model)
+    data = mujoco.MjData(model)
+    pos = np.empty((len(qpos), len(geoms), 3))
+    wxyz = np.empty((len(qpos), len(geoms), 4))
+    for t, q in enumerate(qpos):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        pos[t] = data.geom_xpos[geoms]
+        for g, gid in enumerate(geoms):
+            mujoco.mju_mat2Quat(wxyz[t, g], data.geom_xmat[gid])
+    return pos, wxyz
+
+
+def export_amc(result, path) -> str:
+    """Write the transition (clip 1 context, window, clip 2 context) as an AMC, atomically.
+
+    BVH export joins here once ``upm`` writes BVH (not yet: the studio offers AMC only).
+    """
+    from upm.amc import write_amc
+
+    write_amc(path, result.motion)
+    return str(path)
+
+
+def dof_curve_png(result, linear, path, dof: str | None = None) -> str:
+    """The paper's Fig. 13 for the window: one DOF, the method against linear.
+
+    Returns the DOF drawn (``dof``, or the one where the two differ most).
+    """
+    from eval.figures import plot_window_dof
+
+    return plot_window_dof(path, {result.method: result, "linear": linear}, dof=dof)
+
+
+def physics_check(model, result, tracking_modes=("driven",)) -> list[dict]:
+    """The ``upm simulate`` analysis of the transition (its window marked): summary rows.
+
+    Returns
+    -------
+    list of dict
+        :func:`controller.report.summary_rows` (``all``, ``window 0``).
+    """
+    from controller.analysis import analyse
+    from controller.report import summary_rows
+
+    report, _ = analyse(model, result.motion, kind="simulate", windows=[result.window],
+                        window_meta=[{"method": result.method}],
+                        tracking_modes=tuple(tracking_modes))
+    return summary_rows(report)

@@ -1,0 +1,138 @@
+"""``upm studio``: the session recomputes on every change, and the real page shows it in
+headless Chromium (Debian's ``chromium``)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+pytest.importorskip("viser", reason="upm studio needs viser (the dev extra installs it)")
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.fixture(scope="module")
+def session(catalog):
+    from studio.session import Session
+
+    s = Session(catalog, "02_01", "02_03")
+    s.method = "snap"
+    return s
+
+
+def test_every_registered_method_is_offered():
+    from studio.session import method_names
+    from upm.transitions import METHODS
+
+    assert method_names() == list(METHODS)
+
+
+def test_alpha_reshapes_the_window_and_poses_follow(session):
+    session.alpha = 0.1
+    low = session.recompute()
+    session.alpha = 0.9
+    high = session.recompute()
+    w = low.result.window
+    assert high.result.alpha == 0.9 and low.result.alpha == 0.1
+    # the key posture moves from near clip 1's end towards clip 2's start
+    assert np.abs(high.result.window_posture_deg - low.result.window_posture_deg).max() > 5.0
+    # clip frames are untouched, the window's capsules move
+    np.testing.assert_allclose(low.geom_pos_m[: w.start], high.geom_pos_m[: w.start])
+    assert np.abs(low.geom_pos_m[w] - high.geom_pos_m[w]).max() > 0.01
+    n = low.result.motion.n_frames
+    assert low.geom_pos_m.shape[:1] == (n,) and low.geom_wxyz.shape[:1] == (n,)
+    np.testing.assert_allclose(np.linalg.norm(low.geom_wxyz, axis=-1), 1.0, atol=1e-9)
+    assert low.valid.shape == (n,)
+
+
+def _screenshot(url: str, out_path, user_dir) -> np.ndarray:
+    import matplotlib.image
+
+    subprocess.run(
+        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+         "--no-first-run", "--disable-background-networking", "--disable-component-update",
+         "--disable-sync", f"--user-data-dir={user_dir}", "--use-gl=swiftshader",
+         "--enable-unsafe-swiftshader", "--window-size=1400,1000",
+         "--virtual-time-budget=8000", f"--screenshot={out_path}", url],
+        check=True, capture_output=True, timeout=300)  # slow on a loaded machine
+    return (matplotlib.image.imread(out_path)[..., :3] * 255).round().astype(int)
+
+
+def _figure_pixels(rgb: np.ndarray) -> int:
+    """Pixels of the 3D view (left of the GUI panel) in the body's valid or invalid tint."""
+    from studio.app import INVALID_RGB, VALID_RGB
+
+    view = rgb[:, :900]
+    count = 0
+    for tint in (VALID_RGB, INVALID_RGB):  # lit surfaces: same hue, shaded brightness
+        t = np.array(tint, float)
+        shade = (view @ t) / (t @ t)
+        near = np.linalg.norm(view - shade[..., None] * t, axis=-1) < 12
+        count += int((near & (shade > 0.4) & (shade < 1.2)).sum())
+    return count
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine (scripts/setup "
+                    "installs Debian's chromium; none could be installed here)")
+def test_page_in_headless_chromium_follows_alpha(session, tmp_path):
+    from studio.app import Studio
+
+    studio = Studio(session, port=_free_port())
+    try:
+        url = f"http://127.0.0.1:{studio.port}/"
+        first = studio.set(alpha=0.1, frame=studio.scene.result.window.start + 10)
+        first_pos_m = first.geom_pos_m[int(studio.frame.value)]
+        second = studio.set(alpha=0.9)
+        # one page load: two took over 5 minutes on the loaded 2-core machine
+        shot = _screenshot(url, tmp_path / "b.png", tmp_path / "profile")
+    finally:
+        studio.stop()
+    assert first.result.alpha == 0.1 and second.result.alpha == 0.9
+    assert np.abs(first.result.window_posture_deg
+                  - second.result.window_posture_deg).max() > 5.0
+    # the pose the page is sent moved with alpha
+    assert np.abs(second.geom_pos_m[int(studio.frame.value)] - first_pos_m).max() > 0.01
+    assert len(np.unique(shot.reshape(-1, 3), axis=0)) > 50, "blank page"
+    assert _figure_pixels(shot) > 500, "no humanoid in the 3D view"
+    keep = os.environ.get("UPM_STUDIO_SCREENSHOT")  # README figure: docs/figures/studio.png
+    if keep:
+        shutil.copyfile(tmp_path / "b.png", keep)
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_export_and_physics_check_of_the_window(session, tmp_path):
+    from studio.session import export_amc, physics_check
+    from upm.amc import read_amc
+
+    result = session.transition()
+    path = export_amc(result, tmp_path / "t.amc")
+    back = read_amc(path, result.motion.skeleton)
+    assert back.n_frames == result.motion.n_frames
+    np.testing.assert_allclose(back.posture_deg, result.motion.posture_deg, atol=1e-3)
+    rows = physics_check(session.model, result)
+    window = next(r for r in rows if r["part"] == "window 0")
+    assert (window["start"], window["stop"]) == (result.window.start, result.window.stop)
+    assert window["method"] == result.method and "driven_error_deg_rms" in window
+
+
+def test_fig13_curve_is_drawn(session, tmp_path):
+    import matplotlib.image
+
+    from studio.session import dof_curve_png
+
+    result = session.transition()
+    linear = session.transition("linear")
+    assert dof_curve_png(result, linear, tmp_path / "c.png", "rhumerus.rz") == "rhumerus.rz"
+    rgb = matplotlib.image.imread(tmp_path / "c.png")[..., :3]
+    assert rgb.std() > 0.05
