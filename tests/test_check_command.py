@@ -98,6 +98,7 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys):
         (["99_99", "--data", str(data_dir)], "no clip '99_99'"),
         (["02_01@500:900", "--data", str(data_dir)], "out of range"),
         (["02_01", "--asf", str(asf), "--data", str(data_dir)], "go with an AMC file"),
+        ([str(tmp_path / "r.json"), "--asf", str(asf)], "r.json: not a motion"),
     ]:
         assert main(["check", *args]) == 2, args
         err = capsys.readouterr().err

@@ -71,6 +71,10 @@ def _motions(args):
         motion = read_amc(amc[0], skeleton, fps=args.fps or 120.0,
                           name=Path(amc[0]).stem)
         return [(motion, subject_model_path(args.asf), None)]
+    for ref in args.motions:
+        if Path(ref).suffix:
+            raise UsageError(f"{ref}: not a motion upm check reads: give an .amc file "
+                             "(with --asf SKEL.asf) or a clip such as 02_01")
     if args.asf or args.fps:
         raise UsageError("--asf and --fps go with an AMC file, not with clips")
     from upm.catalog import Catalog, parse_clip_ref
