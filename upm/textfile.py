@@ -7,6 +7,19 @@ import os
 from upm.errors import DataFileError
 
 
+def _open_binary(path: str | os.PathLike, kind: str):
+    """Open a file for binary reading; a missing, directory or unreadable path is a
+    :class:`DataFileError` naming it."""
+    try:
+        return open(path, "rb")
+    except FileNotFoundError:
+        raise DataFileError(path, f"no such {kind} file") from None
+    except IsADirectoryError:
+        raise DataFileError(path, f"is a directory, not an {kind} file") from None
+    except OSError as exc:
+        raise DataFileError(path, f"cannot read {kind} file: {exc.strerror}") from None
+
+
 def read_text_lines(path: str | os.PathLike, kind: str) -> list[str]:
     """Read a text file as a list of lines (CRLF or LF), with clear errors.
 
@@ -21,15 +34,8 @@ def read_text_lines(path: str | os.PathLike, kind: str) -> list[str]:
     DataFileError
         If the file is missing, unreadable, empty or binary.
     """
-    try:
-        with open(path, "rb") as handle:
-            data = handle.read()
-    except FileNotFoundError:
-        raise DataFileError(path, f"no such {kind} file") from None
-    except IsADirectoryError:
-        raise DataFileError(path, f"is a directory, not an {kind} file") from None
-    except OSError as exc:
-        raise DataFileError(path, f"cannot read {kind} file: {exc.strerror}") from None
+    with _open_binary(path, kind) as handle:
+        data = handle.read()
     if not data.strip():
         raise DataFileError(path, f"empty {kind} file")
     if b"\x00" in data:
@@ -57,15 +63,7 @@ def iter_text_lines(path: str | os.PathLike, kind: str, max_bytes: int | None = 
     """
     from upm.progress import progress
 
-    try:
-        handle = open(path, "rb")
-    except FileNotFoundError:
-        raise DataFileError(path, f"no such {kind} file") from None
-    except IsADirectoryError:
-        raise DataFileError(path, f"is a directory, not an {kind} file") from None
-    except OSError as exc:
-        raise DataFileError(path, f"cannot read {kind} file: {exc.strerror}") from None
-    with handle:
+    with _open_binary(path, kind) as handle:
         size = os.fstat(handle.fileno()).st_size
         if max_bytes is not None and size > max_bytes:
             raise DataFileError(path, f"{kind} file of {size} bytes is over the limit of "
