@@ -201,6 +201,28 @@ def test_a_zip_bomb_map_is_refused_unread(tmp_path, map_bytes):
     _assert_names(info.value, path)
 
 
+def test_a_map_member_with_an_unbalanced_npy_header_names_the_map(tmp_path, map_bytes):
+    """numpy parses the .npy header with Python's tokenizer: an unclosed bracket there
+    raises ``tokenize.TokenError`` (found by a 10,000-case campaign)."""
+    import io
+    import zipfile
+
+    from upm.posture_map import load_map
+
+    out = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(map_bytes)) as src, zipfile.ZipFile(out, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "neurons_body.npy":
+                data = data.replace(b"'shape': (", b"'shape': ((", 1)
+            dst.writestr(info.filename, data)
+    path = tmp_path / "unbalanced.npz"
+    path.write_bytes(out.getvalue())
+    with pytest.raises(DataFileError) as info:
+        load_map(path)
+    _assert_names(info.value, path)
+
+
 def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
     import io
     import zipfile

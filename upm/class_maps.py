@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import os
+import tokenize
 import zipfile
 import zlib
 from typing import ClassVar
@@ -343,7 +344,7 @@ MAX_COMPRESSION_RATIO = 200
 #: What reading a damaged archive member can raise (zip, zlib, the .npy header).
 _ARCHIVE_ERRORS = (OSError, ValueError, EOFError, KeyError, TypeError, SyntaxError,
                    RuntimeError, NotImplementedError, OverflowError, zipfile.BadZipFile,
-                   zlib.error)
+                   zlib.error, tokenize.TokenError)
 
 
 def _read_npz(path) -> dict:
