@@ -12,7 +12,7 @@ can take, and a window fitted as a small convex problem that stays in range.
    paper's: the cubic B-spline through the clips' frames and that key
    (:func:`upm.transitions.spline.keyframe_spline`).
 2. **Window.** Per DOF, the window is a cubic B-spline ``p(t)`` on ``t = 0 .. L+1``
-   (uniform knots, about :data:`KNOT_SPACING` frames apart) whose coefficients solve
+   (uniform knots :data:`KNOT_SPACING` frames apart) whose coefficients solve
 
    ``min |p(1..L) - u|^2 + JERK_WEIGHT * |D3 [clip 1, p(1..L), clip 2]|^2``
 
@@ -32,14 +32,28 @@ can take, and a window fitted as a small convex problem that stays in range.
 **A clip entering the window moving outward past a limit.** The range constraint is on
 the window's frames, never on A or on the join's velocity, so it stays feasible: A lies
 inside the allowed range by construction (the range is widened by A's own excess), and
-with knots every ~2 frames the first spline segment can turn back before frame 1 (its
-value, slope and curvature at A leave the next two coefficients free). The turn costs
+with a knot at every frame the first spline segment can turn back before frame 1 (its
+value and slope at A leave the segment's other coefficients free). The turn costs
 jerk, not validity. Should the QP still report inconsistent constraints (very short
 windows, where both joins and the range fight over a few coefficients), the range
 becomes a soft constraint with a heavy penalty on the excess (``soft_range_dofs`` in the
-diagnostics counts those DOFs). A DOF whose allowed arc does not contain the short way
-from A to B (possible only for ranges near 360 degrees) is left unconstrained and
-counted in ``unconstrained_dofs``.
+diagnostics counts those DOFs). A DOF whose allowed arc holds neither way from A to B
+(only a range of a full turn) is left unconstrained and counted in
+``unconstrained_dofs``.
+
+**At a limit, the range wins over the frames' C1.** When an end posture sits on its
+bound and its clip moves outward across it (clip 1 arriving at A on the bound; clip 2
+leaving B inward, which seen from the window is arriving from beyond), a window whose
+frames continue the clip's velocity would have a frame beyond the bound. The spline
+keeps the join's slope (the equality) and turns back between the join and the next
+frame, so the *frames* show a velocity change there (:func:`limit_turns` names those
+DOFs; ``limit_turn_dofs`` counts them).
+
+**The long way round.** Widened by the ends' excess, the allowed arc can hold A and B
+but not the short way between them (e.g. a shoulder rz at -53 at A and 144 at B, range
+[-90, 90] widened to [-144, 144]: the short way passes 180). A joint cannot turn through
+its limit, so for such DOFs clip 2 is taken a whole turn further (:func:`long_way_turns`)
+and the window goes the long way, inside the arc (``long_way_dofs``).
 
 **Where the kinematic checks come from.** ``upm`` never imports MuJoCo (the layering
 ``upm`` <- ``humanoid_xml`` <- ``controller``). The key source, :class:`FeasibleKeys`,
@@ -56,6 +70,7 @@ it just cannot avoid self-collisions.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from collections.abc import Callable
@@ -64,6 +79,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from upm.angles import angle_diff_deg, wrap_deg
+from upm.angular_search import diff_of_wrapped
 from upm.errors import UsageError
 from upm.limits import limit_excess_deg
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
@@ -71,12 +87,16 @@ from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
 from upm.transitions.spline import keyframe_spline
 
 #: Weight of the squared third differences (deg/frame^3) against the squared distance to
-#: the UPM curve (deg^2). Chosen on 20 real pairs (tests/transition_data.py and the
-#: study's first pairs): 10 halves upm's jerk tail while moving the window's frames by
-#: a median 0.5 degree from the UPM curve.
-JERK_WEIGHT = 10.0
-#: Frames between the window spline's knots.
-KNOT_SPACING = 2.0
+#: the UPM curve (deg^2). Measured on 40 test pairs (eval.pairs.draw_pairs, seed 1,
+#: L = 20; the study draws with seed 0): weights 10 / 100 / 1000 give a mean window jerk
+#: of 526 / 489 / 436 10^3 deg/s^3 (upm 540, linear 1344) and move the window a median
+#: 0.08 / 0.30 / 1.17 degrees from the UPM curve; 100 keeps the window on the map's curve
+#: (nearest-real distance) while cutting jerk.
+JERK_WEIGHT = 100.0
+#: Frames between the window spline's knots: knots every frame gave a mean jerk of 489
+#: against 537 with knots every 2 frames (same pairs, weight 100): the turn-backs near
+#: a limit are smoother with more freedom.
+KNOT_SPACING = 1.0
 #: Nearest in-range neurons per class considered for the key.
 CLASS_CANDIDATES = 3
 #: Whole-body key candidates checked for self-collision (nearest first).
@@ -117,6 +137,7 @@ class FeasibleKeys:
         self.checker_for = checker_for
         self._checkers: dict[int, tuple[object, object]] = {}
         self._excess: dict[bytes, dict[str, np.ndarray]] = {}
+        self._outside: dict[tuple, np.ndarray] = {}
 
     def key_posture(self, a_deg, b_deg, alpha=0.5) -> np.ndarray:
         """The map's own key posture (the key-posture protocol); the method itself picks
@@ -143,6 +164,19 @@ class FeasibleKeys:
                 for c in CLASS_NAMES}
         return self._excess[key]
 
+    def _inside(self, class_name: str, limits_deg, widen_deg) -> np.ndarray:
+        """Indices of the class's neurons inside the allowed range."""
+        excess = self.neuron_excess(limits_deg)[class_name]
+        key = (np.ascontiguousarray(limits_deg).tobytes(), class_name)
+        if key not in self._outside:
+            self._outside[key] = np.flatnonzero(excess.max(axis=1) > 0)
+        outside = self._outside[key]
+        widen = widen_deg[CLASS_SLICES[class_name]]
+        allowed = np.all(excess[outside] <= widen + 1e-9, axis=1)
+        inside = np.ones(excess.shape[0], dtype=bool)
+        inside[outside[~allowed]] = False
+        return np.flatnonzero(inside)
+
     def candidates(self, point_deg, limits_deg, widen_deg, count: int = KEY_TRIES):
         """Whole-body key candidates inside the allowed range, nearest the point first.
 
@@ -162,22 +196,22 @@ class FeasibleKeys:
             Wrapped postures; per class one in-range neuron (or C clamped into the range
             when no neuron of the class is in range).
         """
-        excess = self.neuron_excess(limits_deg)
+        point = wrap_deg(point_deg)
         per_class = []
         for c in CLASS_NAMES:
             s = CLASS_SLICES[c]
             neurons = self.posture_map.neurons[c]
-            inside = np.all(excess[c] <= widen_deg[s] + 1e-9, axis=1)
-            if not inside.any():
-                per_class.append([(0.0, clamp_into_range(point_deg[s], limits_deg[s],
+            inside = self._inside(c, limits_deg, widen_deg)
+            if not inside.size:
+                per_class.append([(0.0, clamp_into_range(point[s], limits_deg[s],
                                                          widen_deg[s]))])
                 continue
-            d = wrap_deg(neurons[inside] - point_deg[s])
-            dist = np.einsum("kd,kd->k", d, d)
+            d = diff_of_wrapped(neurons, point[s])
+            dist = np.einsum("kd,kd->k", d, d)[inside]
             k = min(CLASS_CANDIDATES, dist.size)
             best = np.argpartition(dist, k - 1)[:k]
             best = best[np.argsort(dist[best])]
-            per_class.append([(float(dist[i]), neurons[inside][i]) for i in best])
+            per_class.append([(float(dist[i]), neurons[inside[i]]) for i in best])
         combos = sorted(itertools.product(*per_class), key=lambda p: sum(x[0] for x in p))
         out = []
         for combo in combos[:count]:
@@ -204,6 +238,37 @@ def clamp_into_range(angle_deg, limits_deg, widen_deg) -> np.ndarray:
 # --- the allowed range --------------------------------------------------------------------
 
 
+def long_way_turns(problem: WindowProblem) -> np.ndarray:
+    """Per DOF, the whole turns (-1, 0 or +1) to add to clip 2 so that A -> B stays inside
+    the allowed arc: nonzero where the short way from A to B leaves it but the long way
+    does not (a joint cannot turn through its limit; with the arc widened by the ends'
+    excess, this happens on real pairs, e.g. a shoulder rz beyond its limit at B).
+
+    Returns
+    -------
+    ndarray of float, shape (63,)
+    """
+    lo, hi, _ = _widened(problem)
+    a, b = problem.a_deg, problem.b_deg
+    shift = 360.0 * np.floor((a - lo + 1e-6) / 360.0)
+    lo_t, hi_t = lo + shift, hi + shift
+    tolerance = 1e-5
+    turns = np.zeros_like(a)
+    for k in (-1.0, 1.0):
+        moved = b + 360.0 * k
+        fits = ((b < lo_t - tolerance) | (b > hi_t + tolerance)) & (
+            moved >= lo_t - tolerance) & (moved <= hi_t + tolerance)
+        turns[fits & problem.skeleton.declared] = k
+    return turns
+
+
+def _widened(problem: WindowProblem):
+    limits = problem.skeleton.limits_deg
+    ends = limit_excess_deg(np.stack([problem.a_deg, problem.b_deg]), limits)
+    widen = ends.max(axis=0)
+    return limits[:, 0] - widen, limits[:, 1] + widen, widen
+
+
 def allowed_range(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                    np.ndarray]:
     """The allowed range of each DOF on the turn of the window's (unwrapped) angles.
@@ -213,27 +278,45 @@ def allowed_range(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray, np.nd
     lower_deg, upper_deg : ndarray, shape (63,)
         Bounds for the window's frames, on A's turn, ``RANGE_MARGIN_DEG`` inside.
     constrained : ndarray of bool, shape (63,)
-        DOFs with a bound (declared, range below a full turn, and the short way from A
-        to B inside it).
+        DOFs with a bound: declared, range below a full turn, and B (as the problem has
+        it: see :func:`long_way_turns`) inside the arc on A's turn.
     widen_deg : ndarray, shape (63,)
         The larger of A's and B's excess beyond the ASF limits, per DOF.
     """
-    skeleton = problem.skeleton
-    limits = skeleton.limits_deg
-    ends = limit_excess_deg(np.stack([problem.a_deg, problem.b_deg]), limits)
-    widen = ends.max(axis=0)
-    lo = limits[:, 0] - widen
-    hi = limits[:, 1] + widen
+    lo, hi, widen = _widened(problem)
     a, b = problem.a_deg, problem.b_deg
     shift = 360.0 * np.floor((a - lo + 1e-6) / 360.0)
     lo_t, hi_t = lo + shift, hi + shift
     tolerance = 1e-5
-    constrained = (skeleton.declared & (hi - lo < 360.0 - 1e-6)
+    constrained = (problem.skeleton.declared & (hi - lo < 360.0 - 1e-6)
                    & (a >= lo_t - tolerance) & (a <= hi_t + tolerance)
                    & (b >= lo_t - tolerance) & (b <= hi_t + tolerance))
     lower = np.minimum(lo_t + RANGE_MARGIN_DEG, np.minimum(a, b))
     upper = np.maximum(hi_t - RANGE_MARGIN_DEG, np.maximum(a, b))
     return lower, upper, constrained, widen
+
+
+def limit_turns(problem: WindowProblem, lower_deg, upper_deg, constrained,
+                tolerance_deg: float = 1e-3) -> np.ndarray:
+    """DOFs whose C1 join would need a window frame beyond the range: the end posture
+    sits on its bound and the clip moves outward across it (at A: clip 1 arriving at the
+    bound; at B: clip 2 leaving it inward, which seen from the window is arriving from
+    beyond). There the range wins: the spline keeps the clip's slope at the join but
+    turns back between the join and the next frame, so the frames show the turn.
+
+    Returns
+    -------
+    ndarray of bool, shape (2, 63)
+        At A, at B.
+    """
+    v_a = _end_velocity(problem.before_deg, True)
+    v_b = _end_velocity(problem.after_deg, False)
+    a, b = problem.a_deg, problem.b_deg
+    at_a = constrained & (((a >= upper_deg - tolerance_deg) & (v_a > 0))
+                          | ((a <= lower_deg + tolerance_deg) & (v_a < 0)))
+    at_b = constrained & (((b >= upper_deg - tolerance_deg) & (v_b < 0))
+                          | ((b <= lower_deg + tolerance_deg) & (v_b > 0)))
+    return np.stack([at_a, at_b])
 
 
 # --- the window fit -----------------------------------------------------------------------
@@ -384,12 +467,29 @@ def _new_collisions(pairs: list[frozenset], at_ends: frozenset) -> int:
     return sum(bool(p - at_ends) for p in pairs)
 
 
+def _collision_free_first(candidates, checker, at_ends, wanted: int) -> list:
+    """The candidates reordered: the first ``wanted`` collision-free ones (checked one
+    at a time, nearest first), then the others in their order."""
+    free, colliding = [], []
+    for k, key in enumerate(candidates):
+        if checker.self_collision_pairs(key)[0] - at_ends:
+            colliding.append(key)
+        else:
+            free.append(key)
+            if len(free) == wanted:
+                return free + colliding + list(candidates[k + 1:])
+    return free + colliding
+
+
 def solve(problem: WindowProblem) -> WindowResult:
     source = problem.key_source
     if not isinstance(source, FeasibleKeys):
         raise UsageError(f"method 'feasible' needs a FeasibleKeys source, not "
                          f"{type(source).__name__}")
     skeleton = problem.skeleton
+    turns = long_way_turns(problem)
+    if turns.any():
+        problem = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
     lower, upper, constrained, widen = allowed_range(problem)
     point = wrap_deg(problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg))
     candidates = source.candidates(point, skeleton.limits_deg, widen)
@@ -400,10 +500,8 @@ def solve(problem: WindowProblem) -> WindowResult:
     if checker is not None:
         end_pairs = checker.self_collision_pairs(np.stack([problem.a_deg, problem.b_deg]))
         at_ends = frozenset().union(*end_pairs)
-        pairs = checker.self_collision_pairs(np.stack(candidates))
-        free = [k for k, p in zip(candidates, pairs, strict=True) if not (p - at_ends)]
-        keys = free + [k for k, p in zip(candidates, pairs, strict=True) if p - at_ends]
-        key_free = bool(free)
+        keys = _collision_free_first(candidates, checker, at_ends, WINDOW_TRIES)
+        key_free = bool(keys) and not (checker.self_collision_pairs(keys[0])[0] - at_ends)
 
     best = None
     for attempt, key_wrapped in enumerate(keys[:WINDOW_TRIES]):
@@ -421,6 +519,9 @@ def solve(problem: WindowProblem) -> WindowResult:
         "key_candidate": float(attempt),
         "window_self_collision_frames_added": float(colliding),
         "unconstrained_dofs": float((skeleton.declared & ~constrained).sum()),
+        "long_way_dofs": float(np.count_nonzero(turns)),
+        "limit_turn_dofs": float(limit_turns(problem, lower, upper, constrained).any(
+            axis=0).sum()),
         "kinematic_checks": float(checker is not None),
         **fit,
     }
