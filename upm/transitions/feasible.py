@@ -467,9 +467,10 @@ def _new_collisions(pairs: list[frozenset], at_ends: frozenset) -> int:
     return sum(bool(p - at_ends) for p in pairs)
 
 
-def _collision_free_first(candidates, checker, at_ends, wanted: int) -> list:
+def _collision_free_first(candidates, checker, at_ends, wanted: int) -> tuple[list, int]:
     """The candidates reordered: the first ``wanted`` collision-free ones (checked one
-    at a time, nearest first), then the others in their order."""
+    at a time, nearest first), then the others in their order; and how many of the
+    first are collision-free."""
     free, colliding = [], []
     for k, key in enumerate(candidates):
         if checker.self_collision_pairs(key)[0] - at_ends:
@@ -477,8 +478,8 @@ def _collision_free_first(candidates, checker, at_ends, wanted: int) -> list:
         else:
             free.append(key)
             if len(free) == wanted:
-                return free + colliding + list(candidates[k + 1:])
-    return free + colliding
+                return free + colliding + list(candidates[k + 1:]), len(free)
+    return free + colliding, len(free)
 
 
 def solve(problem: WindowProblem) -> WindowResult:
@@ -500,8 +501,7 @@ def solve(problem: WindowProblem) -> WindowResult:
     if checker is not None:
         end_pairs = checker.self_collision_pairs(np.stack([problem.a_deg, problem.b_deg]))
         at_ends = frozenset().union(*end_pairs)
-        keys = _collision_free_first(candidates, checker, at_ends, WINDOW_TRIES)
-        key_free = bool(keys) and not (checker.self_collision_pairs(keys[0])[0] - at_ends)
+        keys, n_free = _collision_free_first(candidates, checker, at_ends, WINDOW_TRIES)
 
     best = None
     for attempt, key_wrapped in enumerate(keys[:WINDOW_TRIES]):
@@ -526,7 +526,7 @@ def solve(problem: WindowProblem) -> WindowResult:
         **fit,
     }
     if checker is not None:
-        diagnostics["key_collision_free"] = float(key_free)
+        diagnostics["key_collision_free"] = float(attempt < n_free)
     return WindowResult(window, key_posture_deg=wrap_deg(key_wrapped), diagnostics=diagnostics)
 
 
