@@ -43,8 +43,10 @@ class HumanoidChecker:
         self._base = np.asarray(self.model.qpos0, dtype=float).copy()
         self._base[free:free + 3] = (0.0, 0.0, _CHECK_HEIGHT_M)
         self._base[free + 3:free + 7] = (1.0, 0.0, 0.0, 0.0)
-        self._names = tuple(mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_BODY, b)
-                            for b in range(self.model.nbody))
+        names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_BODY, b)
+                 for b in range(self.model.nbody)]
+        self._pair_names = np.array([[f"{a}-{b}" for b in names] for a in names], dtype=object)
+        self._geom_body = np.asarray(self.model.geom_bodyid)
 
     def self_collision_pairs(self, postures_deg) -> list[frozenset]:
         """The body pairs in self-collision in each posture.
@@ -62,28 +64,21 @@ class HumanoidChecker:
 
         model, data = self.model, self.data
         postures = np.atleast_2d(np.asarray(postures_deg, dtype=float))
-        radians = np.deg2rad(postures[:, self._posture_index])
+        qpos = np.tile(self._base, (postures.shape[0], 1))
+        qpos[:, self._qpos_address] = np.deg2rad(postures[:, self._posture_index])
         out = []
-        for row in radians:
-            data.qpos[:] = self._base
-            data.qpos[self._qpos_address] = row
+        for q in qpos:
+            data.qpos[:] = q
             mujoco.mj_kinematics(model, data)
             mujoco.mj_collision(model, data)
-            pairs = set()
             n = data.ncon
-            if n:
-                depth = -np.asarray(data.contact.dist[:n])
-                geoms = np.asarray(data.contact.geom[:n])
-                for (g1, g2), d in zip(geoms, depth, strict=True):
-                    if d <= SELF_COLLISION_DEPTH_M:
-                        continue
-                    b1, b2 = sorted((int(model.geom_bodyid[g1]), int(model.geom_bodyid[g2])))
-                    if b1 == 0:
-                        continue
-                    pairs.add(f"{self._names[b1]}-{self._names[b2]}")
-            out.append(frozenset(pairs))
+            if not n:
+                out.append(frozenset())
+                continue
+            deep = -data.contact.dist[:n] > SELF_COLLISION_DEPTH_M
+            bodies = np.sort(self._geom_body[data.contact.geom[:n][deep]], axis=1)
+            out.append(frozenset(self._pair_names[b1, b2] for b1, b2 in bodies if b1 != 0))
         return out
-
 
 def feasible_key_source(context):
     """The key source of ``feasible``: the UPM of ``context`` with the humanoid's checks.
