@@ -133,7 +133,29 @@ def damped_projection(target, start_deg, end_deg, initial_deg) -> tuple[np.ndarr
         rotation_error = euler_to_matrix(np.degrees(angles), "XYZ") - target
         return np.concatenate([rotation_error.ravel(), weight * np.diff(chained, axis=0).ravel()])
 
-    fit = least_squares(residuals, np.radians(initial_deg).ravel(), method="trf")
+    # The Jacobian in closed form: R = Rz Ry Rx and dR_k/dθ = K_k R_k (K_k: the skew
+    # matrix of axis k), so each frame's 9 rotation residuals depend on its 3 angles only.
+    steps = np.zeros((3 * (n_frames + 1), 3 * n_frames))
+    index = np.arange(3 * n_frames)
+    steps[index, index] = weight
+    steps[index + 3, index] = -weight
+    skew = np.zeros((3, 3, 3))
+    for k, (i, j) in enumerate(((2, 1), (0, 2), (1, 0))):
+        skew[k, i, j], skew[k, j, i] = 1.0, -1.0
+    rows = np.arange(9 * n_frames).reshape(n_frames, 9)
+
+    def jacobian(x):
+        degrees = np.degrees(x.reshape(n_frames, 3))
+        rx, ry, rz = (axis_rotation(degrees[:, k], "XYZ"[k]) for k in range(3))
+        d = np.stack([rz @ ry @ skew[0] @ rx, rz @ skew[1] @ ry @ rx, skew[2] @ rz @ ry @ rx],
+                     axis=-1)  # (T, 3, 3, 3): derivative of R_t by its angle k, last axis
+        rotation = np.zeros((9 * n_frames, 3 * n_frames))
+        for k in range(3):
+            rotation[rows, 3 * np.arange(n_frames)[:, None] + k] = d[..., k].reshape(n_frames, 9)
+        return np.concatenate([rotation, steps])
+
+    fit = least_squares(residuals, np.radians(initial_deg).ravel(), jac=jacobian,
+                        method="trf")
     angles = np.degrees(fit.x.reshape(n_frames, 3))
     residual = float(rotation_angle_deg(euler_to_matrix(angles, "XYZ"), target).max())
     return angles, residual
