@@ -160,7 +160,8 @@ class TransitionMethod:
         use: a builder that needs heavy packages, e.g. the humanoid's kinematic checks,
         costs nothing until the method is used).
     key_help : str
-        What the key source is, for the error raised when it is missing.
+        What the key source is, for the error raised when it is missing; starts with
+        "a trained" when it is a trained map (the ``--map`` error lists the others).
     """
 
     name: str

@@ -69,7 +69,8 @@ def get_method(name: str) -> TransitionMethod:
 
 
 def map_free_methods() -> list[str]:
-    """Methods that need no ``--map`` (no key source, or one built from the data)."""
+    """Methods that need no ``--map`` (no key source, or one built from the data): by
+    convention a map method's ``key_help`` starts with "a trained"."""
     return [n for n, m in METHODS.items() if not m.key_help.startswith("a trained")]
 
 
@@ -91,6 +92,10 @@ class KeySourceContext:
         Progress bars while training maps.
     train_step : int
         Every ``train_step``-th training frame for the sources fitted on postures.
+    method : str
+        The method being built (set by :func:`build_key_source`; for error messages).
+    map_used : bool
+        Whether a builder read ``map_path`` (``--map`` given but unused is warned about).
     """
 
     catalog: object | None = None
