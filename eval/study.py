@@ -29,10 +29,10 @@ from eval.pairs import (
     exclusion_zones,
     real_exclusion_zone,
 )
+from upm.transitions import METHODS
 
-#: Transition methods of the study, in table order.
-STUDY_METHODS = ("upm", "som", "classnn", "snap", "linear", "slerp", "inertialize",
-                 "spacetime")
+#: Transition methods of the study, in table order: every registered method.
+STUDY_METHODS = tuple(METHODS)
 #: The key-posture ratio (the paper's: the key posture at the window's middle).
 ALPHA = 0.5
 
@@ -78,7 +78,7 @@ class StudyData:
         Their frame counts.
     real : eval.realdata.RealPostures
     sources : dict of str to KeyPostureSource
-        By key kind: ``upm``, ``som``, ``classnn``, ``snap``.
+        By method, for the methods that have one.
     train_subjects : frozenset of str
         Subjects with at least one clip in the train split.
     """
@@ -109,24 +109,15 @@ class StudyData:
 
 
 def key_sources(catalog, methods, progress: bool = False) -> dict:
-    """The key-posture sources the methods need: the UPM and the SOM trained on the train
-    split (cached: :func:`upm.map_cache.trained_map`), and the ablations fitted on every
-    frame of it."""
-    from upm.map_cache import trained_map
-    from upm.transitions import METHODS, ClassNearest, NearestPosture, training_postures
+    """The key-posture sources the methods need, by method, each built by its registered
+    builder (:func:`upm.transitions.build_key_source`) from one shared context: the UPM
+    and the SOM trained on the train split (cached: :func:`upm.map_cache.trained_map`),
+    the ablations fitted on every frame of it."""
+    from upm.transitions import KeySourceContext, build_key_source
 
-    kinds = {METHODS[m].key_kind for m in methods} - {None}
-    sources = {}
-    for kind in ("upm", "som"):
-        if kind in kinds:
-            sources[kind] = trained_map(catalog, kind, progress=progress)
-    if kinds & {"classnn", "snap"}:
-        postures = training_postures(catalog, "train")
-        if "classnn" in kinds:
-            sources["classnn"] = ClassNearest(postures)
-        if "snap" in kinds:
-            sources["snap"] = NearestPosture(postures)
-    return sources
+    context = KeySourceContext(catalog=catalog, train_maps=True, progress=progress)
+    built = {m: build_key_source(m, context) for m in methods}
+    return {m: s for m, s in built.items() if s is not None}
 
 
 def prepare(config: StudyConfig, progress: bool = False) -> StudyData:
@@ -160,9 +151,9 @@ def _warm_up(data: StudyData) -> None:
 
 def make_transition(data: StudyData, pair: Pair, method: str, frames: int):
     """The transition of one pair by one method (``upm.transitions.transition``)."""
-    from upm.transitions import METHODS, transition
+    from upm.transitions import transition
 
-    source = data.sources.get(METHODS[method].key_kind)
+    source = data.sources.get(method)
     return transition(method, data.segment(pair.first), data.segment(pair.second), frames,
                       ALPHA, source)
 

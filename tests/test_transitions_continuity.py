@@ -11,15 +11,18 @@ import dataclasses
 import numpy as np
 import pytest
 
-from tests.transition_data import PAIRS, pair, sources, window_edges
+from controller.kinematic_check import HumanoidChecker
+from tests.transition_data import PAIRS, feasible_limit_turns, pair, sources, window_edges
 from upm.angles import angle_diff_deg
+from upm.limits import limit_excess_deg
 from upm.posture_map import UniformPostureMap
 from upm.skeleton import POSTURE_DOF_NAMES
 from upm.som import KohonenSOM
 from upm.transitions import METHODS, ClassNearest, NearestPosture, transition
+from upm.transitions.feasible import FeasibleKeys
 
 PROMISES = {"upm": "C1", "som": "C1", "classnn": "C1", "snap": "C1", "linear": "C0",
-            "slerp": "C0", "inertialize": "C1", "spacetime": "C1"}
+            "slerp": "C0", "inertialize": "C1", "spacetime": "C1", "feasible": "C1"}
 
 
 def test_every_method_states_its_continuity():
@@ -41,6 +44,9 @@ def test_joins_on_real_pairs(data_dir, index):
         result = _run(data_dir, method, before, after)
         (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
         assert c0_a <= 0 and c0_b <= 0, (method, PAIRS[index], c0_a, c0_b)
+        if method == "feasible":  # C1 except where a join turns at a limit (the range wins)
+            skip = feasible_limit_turns(before, after)
+            (_, c1_a), (_, c1_b) = window_edges(result, skip)
         if METHODS[method].continuity == "C1":
             assert c1_a <= 0 and c1_b <= 0, (method, PAIRS[index], c1_a, c1_b)
 
@@ -86,14 +92,23 @@ def test_joins_across_the_wrap(data_dir, method):
     own = np.concatenate([before.posture_deg, after.posture_deg])
     kind = METHODS[method].key_kind
     makers = {"classnn": ClassNearest, "snap": NearestPosture,
-              "upm": lambda x: UniformPostureMap().fit(x), "som": lambda x: KohonenSOM().fit(x)}
+              "upm": lambda x: UniformPostureMap().fit(x), "som": lambda x: KohonenSOM().fit(x),
+              "feasible": lambda x: FeasibleKeys(UniformPostureMap().fit(x), HumanoidChecker)}
     source = makers[kind](own) if kind in makers else None
     result = transition(method, before, after, 20, 0.5, source)
     (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
     assert c0_a <= 0 and c0_b <= 0
     if METHODS[method].continuity == "C1":
         assert c1_a <= 0 and c1_b <= 0
-    # The short way: 10 degrees through 180, never back through 0.
     window = result.window_posture_deg[:, dof]
-    assert np.all(np.abs(angle_diff_deg(window, 180.0)) < 45.0), window
     assert np.all((window >= -180.0) & (window < 180.0))  # wrapped, as documented
+    if method == "feasible" and result.diagnostics["long_way_dofs"]:
+        # The short way passes the DOF's limit (the range widened by the ends' excess
+        # still stops short of 180): feasible goes the long way, inside the range.
+        limits = before.skeleton.limits_deg[dof:dof + 1]
+        ends = limit_excess_deg(np.array([[before.posture_deg[-1, dof]],
+                                          [after.posture_deg[0, dof]]]), limits).max()
+        assert limit_excess_deg(window[:, None], limits).max() <= ends + 1e-6
+        return
+    # The short way: 10 degrees through 180, never back through 0.
+    assert np.all(np.abs(angle_diff_deg(window, 180.0)) < 45.0), window

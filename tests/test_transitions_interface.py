@@ -12,8 +12,8 @@ from upm.transitions import KEY_POSTURE_METHODS, METHODS, ClassNearest, transiti
 
 def test_registry():
     assert set(METHODS) == {"upm", "som", "classnn", "snap", "linear", "slerp", "inertialize",
-                            "spacetime"}
-    assert set(KEY_POSTURE_METHODS) == {"upm", "som", "classnn", "snap"}
+                            "spacetime", "feasible"}
+    assert set(KEY_POSTURE_METHODS) == {"upm", "som", "classnn", "snap", "feasible"}
     for name, method in METHODS.items():
         assert method.name == name and method.summary and method.continuity in ("C0", "C1")
 

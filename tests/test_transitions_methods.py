@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from tests.transition_data import pair
+from tests.transition_data import PAIRS, catalog_of, pair
 from upm.angles import angle_diff_deg, interpolate_deg
 from upm.rotations import euler_to_matrix
 from upm.skeleton import JOINTS
@@ -179,3 +179,27 @@ def test_spacetime_is_a_minimum(spacetime_run):
         e[i] = 1e-4
         numeric = (value(z + e) - value(z - e)) / 2e-4
         assert gradient[i] == pytest.approx(numeric, rel=1e-3, abs=1e-9 * best)
+
+
+#: 16_15@180 -> 05_11@40: the right shoulder's arc passes 1.4 degrees from gimbal lock
+#: (a 178.8-degree Euler branch flip in one frame before the fix).
+NEAR_LOCK = ("16_15", 180, "05_11", 40)
+
+
+@pytest.mark.parametrize("index", range(len(PAIRS) + 1))
+def test_slerp_steps_no_larger_than_the_clips_own(data_dir, index):
+    """The window's Euler angles are continuous along time: no frame-to-frame step (joins
+    included) larger than the largest of the clips' own in the second around it."""
+    if index < len(PAIRS):
+        before, after = pair(data_dir, index, frames=120)
+    else:
+        catalog = catalog_of(data_dir)
+        name1, a, name2, b = NEAR_LOCK
+        before = catalog.load(name1).frames(a + 1 - 120, a + 1)
+        after = catalog.load(name2).frames(b, b + 120)
+    result = transition("slerp", before, after, 20)
+    posture = result.motion.posture_deg[:, before.skeleton.declared]
+    steps = np.abs(angle_diff_deg(posture[1:], posture[:-1])).max(axis=1)
+    w = result.window
+    own = max(steps[:w.start - 1].max(), steps[w.stop:].max())
+    assert steps[w.start - 1:w.stop].max() <= own, (steps[w.start - 1:w.stop].max(), own)

@@ -33,16 +33,15 @@ def catalog_of(data_dir) -> Catalog:
 
 @functools.lru_cache(maxsize=2)
 def sources(data_dir) -> dict:
-    """Key-posture source per key method: classnn and snap fitted on the train split (every
-    2nd frame: enough, and half the fitting time); the UPM and SOM of the study (trained
-    on the train split once, then cached: upm.map_cache)."""
-    from upm.map_cache import trained_map
-    from upm.transitions import ClassNearest, NearestPosture, training_postures
+    """Key-posture source per key method, each built by its registered builder: classnn
+    and snap fitted on the train split (every 2nd frame: enough, and half the fitting
+    time); the UPM and SOM of the study (trained on the train split once, then cached:
+    upm.map_cache); feasible: the UPM with the humanoid's checks."""
+    from upm.transitions import METHODS, KeySourceContext, build_key_source
 
-    catalog = catalog_of(data_dir)
-    postures = training_postures(catalog, "train", step=2)
-    return {"classnn": ClassNearest(postures), "snap": NearestPosture(postures),
-            "upm": trained_map(catalog, "upm"), "som": trained_map(catalog, "som")}
+    context = KeySourceContext(catalog=catalog_of(data_dir), train_maps=True, train_step=2)
+    return {name: build_key_source(name, context) for name, method in METHODS.items()
+            if method.needs_key_source}
 
 
 def pair(data_dir, index: int, frames: int = CLIP_FRAMES):
@@ -91,9 +90,30 @@ def edge_excess(motion, real_index: int, direction: int, dofs) -> tuple[float, f
     return float(c0.max()), float(c1.max())
 
 
-def window_edges(transition):
-    """((C0, C1) excess at A, (C0, C1) excess at B) over the declared DOFs."""
-    dofs = np.flatnonzero(transition.motion.skeleton.declared)
-    at_a = edge_excess(transition.motion, transition.a_index, +1, dofs)
-    at_b = edge_excess(transition.motion, transition.b_index, -1, dofs)
+def window_edges(transition, skip=None):
+    """((C0, C1) excess at A, (C0, C1) excess at B) over the declared DOFs.
+
+    ``skip``: optional bool array (2, 63) of DOFs left out at A and at B (feasible's
+    limit turns: :func:`upm.transitions.feasible.limit_turns`)."""
+    declared = transition.motion.skeleton.declared
+    skip = np.zeros((2, declared.size), dtype=bool) if skip is None else np.asarray(skip)
+    at_a = edge_excess(transition.motion, transition.a_index, +1,
+                       np.flatnonzero(declared & ~skip[0]))
+    at_b = edge_excess(transition.motion, transition.b_index, -1,
+                       np.flatnonzero(declared & ~skip[1]))
     return at_a, at_b
+
+
+def feasible_limit_turns(before, after, frames=20, alpha=0.5):
+    """The DOFs of a feasible transition whose join turns at a limit, (2, 63) bool."""
+    from upm.transitions import make_problem
+    from upm.transitions.feasible import allowed_range, limit_turns, long_way_turns
+
+    problem = make_problem(before, after, frames, alpha)
+    turns = long_way_turns(problem)
+    if turns.any():
+        import dataclasses
+
+        problem = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
+    lower, upper, constrained, _ = allowed_range(problem)
+    return limit_turns(problem, lower, upper, constrained)

@@ -8,11 +8,14 @@ differ, turned about the vertical so its heading continues clip 1's, and moved t
 continue where the window ends.
 
 Methods (--method): upm (default; the paper: UPM key posture + cubic B-spline; needs
---map), som (needs a SOM --map), classnn and snap (key posture from the nearest training
-postures of --data's train split: no map needed), linear, slerp, inertialize, spacetime.
+--map), feasible (the recommended one: UPM key the humanoid can take, window fitted to
+stay in the joint ranges with minimum jerk; needs a UPM --map), som (needs a SOM --map),
+classnn and snap (key posture from the nearest training postures of --data's train
+split: no map needed), linear, slerp, inertialize, spacetime.
 
 Examples:
   upm transition --map upm.npz --from 02_01@200 --to 02_03@20 --out walk-run.amc
+  upm transition --method feasible --map upm.npz --from 02_01@200 --to 02_03@20 --out f.amc
   upm transition --method linear --from 05_01 --to 05_11 --out lin.amc --json lin.json
 """
 
@@ -24,10 +27,12 @@ HELP = "join two clips with a transition and write an AMC (and JSON)"
 def add_method_arguments(parser, default_method: str = "upm") -> None:
     """--method, --map, --alpha, --frames, --no-align: shared with ``upm sequence``."""
     parser.add_argument("--method", default=default_method, metavar="M",
-                        help="upm, som, classnn, snap, linear, slerp, inertialize, spacetime "
-                             f"(default: {default_method})")
+                        help="upm, feasible, som, classnn, snap, linear, slerp, inertialize, "
+                             f"spacetime (default: {default_method}; the registry: "
+                             "upm.transitions.METHODS)")
     parser.add_argument("--map", metavar="MAP.npz", default=None,
-                        help="trained posture map (upm train), needed by --method upm/som")
+                        help="trained posture map (upm train), needed by --method "
+                             "upm/feasible/som")
     parser.add_argument("--alpha", type=float, default=0.5,
                         help="key-posture ratio in [0, 1]: 0 is A, 1 is B (default 0.5)")
     parser.add_argument("--frames", type=int, default=20, metavar="L",

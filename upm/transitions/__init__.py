@@ -19,14 +19,16 @@ linear     C0         per-DOF linear blend, short way round (the paper's compari
 slerp      C0         per-joint slerp, projected back to the declared Euler DOFs
 inertialize C1        Bollo's quintic offset decay
 spacetime  C1         minimum inertial effort by L-BFGS-B (Rose et al. 1996 stand-in)
+feasible   C1         UPM key among the neurons the humanoid can take, then the window as a
+                      small QP: near the UPM curve, minimum jerk, every frame in range
 ========== ========== ==================================================================
 
-The root is the same for every method (:mod:`upm.transitions.root`).
+The root is the same for every method (:mod:`upm.transitions.root`). The registry, and
+how each method's key source is built, is :mod:`upm.transitions.registry`.
 """
 
 from __future__ import annotations
 
-from upm.transitions import inertialize, keyposture, linear, slerp, spacetime
 from upm.transitions.base import (
     KeyPostureSource,
     Transition,
@@ -34,16 +36,16 @@ from upm.transitions.base import (
     WindowProblem,
     WindowResult,
 )
-from upm.transitions.join import get_method, make_problem, match_clip, transition
+from upm.transitions.join import make_problem, match_clip, transition
+from upm.transitions.registry import (
+    METHODS,
+    KeySourceContext,
+    build_key_source,
+    get_method,
+    register,
+)
 from upm.transitions.sequence import Sequence, build_sequence
 from upm.transitions.sources import ClassNearest, NearestPosture, training_postures
-
-#: Every transition method, by name.
-METHODS: dict[str, TransitionMethod] = {
-    m.name: m
-    for m in (keyposture.UPM, keyposture.SOM, keyposture.CLASSNN, keyposture.SNAP,
-              linear.METHOD, slerp.METHOD, inertialize.METHOD, spacetime.METHOD)
-}
 
 #: Names of the methods whose key posture comes from a source (a map or an ablation).
 KEY_POSTURE_METHODS: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.needs_key_source)
@@ -53,16 +55,19 @@ __all__ = [
     "METHODS",
     "ClassNearest",
     "KeyPostureSource",
+    "KeySourceContext",
     "NearestPosture",
     "Sequence",
     "Transition",
     "TransitionMethod",
     "WindowProblem",
     "WindowResult",
+    "build_key_source",
     "build_sequence",
     "get_method",
     "make_problem",
     "match_clip",
+    "register",
     "training_postures",
     "transition",
 ]

@@ -153,6 +153,15 @@ class TransitionMethod:
         ``"classnn"``, ``"snap"``); None if the method needs none.
     summary : str
         One line for ``--help`` and reports.
+    key_source : callable or str or None
+        How the method's key source is built, for key-posture methods:
+        ``build(context: upm.transitions.registry.KeySourceContext) -> KeyPostureSource``,
+        or the same named lazily as ``"package.module:function"`` (imported on first
+        use: a builder that needs heavy packages, e.g. the humanoid's kinematic checks,
+        costs nothing until the method is used).
+    key_help : str
+        What the key source is, for the error raised when it is missing; starts with
+        "a trained" when it is a trained map (the ``--map`` error lists the others).
     """
 
     name: str
@@ -160,6 +169,8 @@ class TransitionMethod:
     continuity: str
     key_kind: str | None
     summary: str
+    key_source: Callable | str | None = None
+    key_help: str = ""
 
     @property
     def needs_key_source(self) -> bool:

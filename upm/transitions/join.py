@@ -13,7 +13,6 @@ Euler angles, in contrast, are written continuing from A's (numerically continuo
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
 
 import numpy as np
 
@@ -30,23 +29,9 @@ from upm.transitions.base import (
     check_frames,
     check_motion,
 )
+from upm.transitions.registry import get_method
 from upm.transitions.root import blend_root, leg_length_m
 from upm.transitions.spline import SPLINE_CONTEXT
-
-
-def _methods() -> Mapping[str, TransitionMethod]:
-    from upm.transitions import METHODS
-
-    return METHODS
-
-
-def get_method(name: str) -> TransitionMethod:
-    """The registered method called ``name`` (UsageError listing them if unknown)."""
-    methods = _methods()
-    try:
-        return methods[name]
-    except KeyError:
-        raise UsageError(f"no transition method {name!r} (methods: {', '.join(methods)})") from None
 
 
 def check_key_source(method: TransitionMethod, key_source) -> None:
@@ -54,12 +39,8 @@ def check_key_source(method: TransitionMethod, key_source) -> None:
     if not method.needs_key_source:
         return
     if key_source is None:
-        what = {"upm": "a trained Uniform Posture Map (upm train --kind upm)",
-                "som": "a trained SOM (upm train --kind som)",
-                "classnn": "upm.transitions.ClassNearest.fit(training postures)",
-                "snap": "upm.transitions.NearestPosture.fit(training postures)"}
         raise UsageError(f"method {method.name!r} needs a key-posture source: "
-                         f"{what.get(method.key_kind, 'a key-posture source')}")
+                         f"{method.key_help or 'a key-posture source'}")
     if not isinstance(key_source, KeyPostureSource):
         raise UsageError(f"method {method.name!r}: {type(key_source).__name__} has no "
                          "key_posture(a_deg, b_deg, alpha)")
@@ -131,7 +112,7 @@ def transition(method: str, before: Motion, after: Motion, frames: int = 20,
     Parameters
     ----------
     method : str
-        A name of :data:`upm.transitions.METHODS`.
+        A name of :data:`upm.transitions.METHODS` (:mod:`upm.transitions.registry`).
     before : Motion
         Clip 1; its last frame is A.
     after : Motion
@@ -142,7 +123,8 @@ def transition(method: str, before: Motion, after: Motion, frames: int = 20,
     alpha : float
         Key-posture ratio in [0, 1]: 0 is A, 1 is B (paper: 0.5).
     key_source : KeyPostureSource, optional
-        Required by the key-posture methods (``upm``, ``som``, ``classnn``, ``snap``).
+        Required by the key-posture methods (``upm``, ``som``, ``classnn``, ``snap``,
+        ``feasible``): :func:`upm.transitions.registry.build_key_source` builds it.
     align_heading : bool
         Turn clip 2 about the vertical so its heading continues clip 1's (default).
     context : int

@@ -54,16 +54,33 @@ def solve(problem: WindowProblem) -> WindowResult:
     })
 
 
-def _method(kind: str, summary: str) -> TransitionMethod:
+def _method(kind: str, summary: str, build, key_help: str) -> TransitionMethod:
     return TransitionMethod(name=kind, solve=solve, continuity="C1", key_kind=kind,
-                            summary=summary)
+                            summary=summary, key_source=build, key_help=key_help)
+
+
+def _classnn(context):
+    from upm.transitions.sources import ClassNearest
+
+    return ClassNearest(context.training_postures())
+
+
+def _snap(context):
+    from upm.transitions.sources import NearestPosture
+
+    return NearestPosture(context.training_postures())
 
 
 UPM = _method("upm", "the paper's method: UPM key posture at the middle, cubic B-spline "
-                     "through clip frames and key (needs a trained map)")
+                     "through clip frames and key (needs a trained map)",
+              lambda context: context.posture_map("upm"),
+              "a trained Uniform Posture Map (upm train --kind upm)")
 SOM = _method("som", "as upm, with the key posture from a classic fixed-grid SOM (the paper's "
-                     "foil; needs a trained SOM)")
+                     "foil; needs a trained SOM)",
+              lambda context: context.posture_map("som"), "a trained SOM (upm train --kind som)")
 CLASSNN = _method("classnn", "as upm, with each class's key sub-posture the nearest training "
-                             "sub-posture (ablation: no map learned)")
+                             "sub-posture (ablation: no map learned)", _classnn,
+                  "upm.transitions.ClassNearest.fit(training postures)")
 SNAP = _method("snap", "as upm, with the key posture the whole-body nearest training posture "
-                       "(ablation)")
+                       "(ablation)", _snap,
+               "upm.transitions.NearestPosture.fit(training postures)")

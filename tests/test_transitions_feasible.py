@@ -1,0 +1,140 @@
+"""``feasible``: every window frame inside the allowed range (the study's rule), C1 joins,
+a key posture the humanoid takes without a new self-collision, on real pairs; where the
+UPM key breaks a limit, feasible does not; ``upm`` stays free of MuJoCo."""
+
+import dataclasses
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from controller.kinematic_check import HumanoidChecker
+from controller.validity import added_excess, check_motion, limit_excess
+from tests.transition_data import (
+    PAIRS,
+    catalog_of,
+    feasible_limit_turns,
+    pair,
+    sources,
+    window_edges,
+)
+from upm.transitions import make_problem, transition
+from upm.transitions.feasible import FeasibleKeys, allowed_range, long_way_turns
+
+#: A real pair beyond tests/transition_data.PAIRS, from the study's draw: the short way
+#: from A to B in rhumerus.rz leaves its range (A -73.7, B 158.4: beyond the +-90 limit,
+#: which widens the range to +-158.4 but not across 180), so the window must go the long
+#: way round.
+LONG_WAY = ("83_26", 432, "05_11", 23)
+
+
+def _pair(data_dir, spec, frames=40):
+    catalog = catalog_of(data_dir)
+    name1, a, name2, b = spec
+    return (catalog.load(name1).frames(a + 1 - frames, a + 1),
+            catalog.load(name2).frames(b, b + frames))
+
+
+def _real_pairs(data_dir):
+    return [pair(data_dir, i) for i in range(len(PAIRS))] + [_pair(data_dir, LONG_WAY)]
+
+
+def _added_excess_deg(result) -> np.ndarray:
+    """The study's added excess of the window frames, (L, 63): beyond the larger excess of
+    A and B, per DOF (controller.validity)."""
+    ends = result.motion.posture_deg[result.a_index:result.b_index + 1]
+    excess = limit_excess(ends, result.motion.skeleton.limits_deg)
+    return added_excess(excess, [slice(1, ends.shape[0] - 1)])[1:-1]
+
+
+def test_every_frame_in_range_joins_c1_and_key_collision_free(data_dir):
+    feasible = sources(data_dir)["feasible"]
+    long_way_seen = False
+    for before, after in _real_pairs(data_dir):
+        limits = before.skeleton.limits_deg
+        declared = before.skeleton.declared
+        # Clip frames at a limit: CMU's clavicle rz sits on its limit in every frame.
+        a = before.posture_deg[-1]
+        assert np.any(declared & ((np.abs(a - limits[:, 0]) < 1e-6)
+                                  | (np.abs(a - limits[:, 1]) < 1e-6)))
+        result = transition("feasible", before, after, 20, 0.5, feasible)
+        assert _added_excess_deg(result).max() <= 1e-6
+        (c0_a, c1_a), (c0_b, c1_b) = window_edges(result, feasible_limit_turns(before, after))
+        assert max(c0_a, c0_b, c1_a, c1_b) <= 0, (c0_a, c1_a, c0_b, c1_b)
+        # The key: no self-collision on the humanoid that A and B do not already have.
+        checker = HumanoidChecker(before.skeleton)
+        ends = frozenset().union(*checker.self_collision_pairs(
+            np.stack([a, after.posture_deg[0]])))
+        assert not checker.self_collision_pairs(result.key_posture_deg)[0] - ends
+        assert result.diagnostics["key_collision_free"] == 1.0
+        long_way_seen |= result.diagnostics["long_way_dofs"] > 0
+    assert long_way_seen
+
+
+def test_the_checker_agrees_with_the_study(data_dir):
+    """HumanoidChecker's pairs are the study's (controller.validity on the subject's model)
+    on real frames with and without self-collision."""
+    from humanoid_xml import catalog_model_path, load_model
+
+    catalog = catalog_of(data_dir)
+    motion = catalog.load("05_11")
+    frames = motion.frames(0, 400)
+    study = check_motion(load_model(catalog_model_path(catalog, "05_11")), frames)
+    expected = [frozenset(p) for p in study.self_pairs()]
+    found = HumanoidChecker(motion.skeleton).self_collision_pairs(frames.posture_deg)
+    assert any(expected) and not all(expected)
+    assert found == expected
+
+
+def test_where_the_upm_key_breaks_a_limit_feasible_does_not(data_dir):
+    before, after = pair(data_dir, 4)  # 02_07@900 -> 02_05@700
+    upm = transition("upm", before, after, 20, 0.5, sources(data_dir)["upm"])
+    feasible = transition("feasible", before, after, 20, 0.5, sources(data_dir)["feasible"])
+    problem = make_problem(before, after, 20, 0.5)
+    _, _, _, widen = allowed_range(problem)
+    limits = before.skeleton.limits_deg
+    upm_key_excess = limit_excess(upm.key_posture_deg, limits)[0] - widen
+    assert upm_key_excess.max() > 1.0  # the UPM key is beyond the allowed range
+    assert _added_excess_deg(upm).max() > 1.0
+    assert (limit_excess(feasible.key_posture_deg, limits)[0] - widen).max() <= 1e-9
+    assert _added_excess_deg(feasible).max() <= 1e-6
+
+
+def test_without_a_checker_the_range_still_holds(data_dir):
+    before, after = _pair(data_dir, LONG_WAY)
+    bare = FeasibleKeys(sources(data_dir)["upm"])
+    result = transition("feasible", before, after, 20, 0.5, bare)
+    assert result.diagnostics["kinematic_checks"] == 0.0
+    assert _added_excess_deg(result).max() <= 1e-6
+    assert result.diagnostics["long_way_dofs"] >= 1
+
+
+def test_the_long_way_is_taken_only_where_the_short_way_leaves_the_range(data_dir):
+    before, after = _pair(data_dir, LONG_WAY)
+    problem = make_problem(before, after, 20, 0.5)
+    turns = long_way_turns(problem)
+    dof = int(np.flatnonzero(turns)[0])
+    linear = transition("linear", before, after, 20)
+    assert limit_excess(linear.window_posture_deg, before.skeleton.limits_deg)[:, dof].max() > (
+        allowed_range(problem)[3][dof] + 10.0)
+    moved = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
+    assert allowed_range(moved)[2][dof]
+
+
+@pytest.mark.parametrize("frames", [1, 2, 4])
+def test_short_windows_stay_feasible(data_dir, frames):
+    """With one to four frames the joins and the range fight over few coefficients: the
+    method still answers, in range (soft range only if the QP finds no solution)."""
+    before, after = pair(data_dir, 0)
+    result = transition("feasible", before, after, frames, 0.5, sources(data_dir)["feasible"])
+    assert np.isfinite(result.window_posture_deg).all()
+    if result.diagnostics["soft_range_dofs"] == 0:
+        assert _added_excess_deg(result).max() <= 1e-6
+
+
+def test_upm_stays_free_of_mujoco():
+    code = ("import sys; from upm.transitions import METHODS, transition; "
+            "import upm.transitions.feasible; assert 'feasible' in METHODS; "
+            "assert 'mujoco' not in sys.modules and 'controller' not in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True)
