@@ -16,6 +16,7 @@ Table 4 on this machine). Figures (PNG): ``fig13_window_dof.png``,
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -65,9 +66,7 @@ def protocol(result: StudyResult) -> dict:
             "residual_context_frames": RESIDUAL_CONTEXT,
             "tracking": "root driven along the reference, servos with human torque limits, "
                         f"from {RESIDUAL_CONTEXT} frames before the window; the free-root "
-                        "simulation is not compared: with no balance control, open-loop "
-                        "tracking with the root free falls within 0.7-1.4 s whatever it is "
-                        "given",
+                        "test (--physics) runs the balance controller through each window",
         },
     }
 
@@ -217,39 +216,100 @@ def write_figures(result: StudyResult, statistics: dict, out: Path) -> dict:
                         "rule": example.rule}}
 
 
-def write_outputs(result: StudyResult, out_dir, figures: bool = True) -> dict:
-    """Write every output of the study into ``out_dir`` (created if missing).
+def write_outputs(result: StudyResult, out_dir, figures: bool = True,
+                  physics=None) -> dict:
+    """Write every output of the study into ``out_dir`` (created if missing), all or
+    nothing: the files are made in a staging folder beside it and moved in only when every
+    one of them exists, so a failure leaves ``out_dir`` as it was.
+
+    Parameters
+    ----------
+    result : StudyResult
+    out_dir : path-like
+    figures : bool
+    physics : eval.physics.PhysicsResult, optional
+        The free-root test (``--physics``): adds ``physics.csv`` (long-form: kind, id,
+        window, method, metric, value), its section in results.json and summary.md, and
+        ``physics.png``.
 
     Returns
     -------
     dict
-        ``files``: name -> path; ``statistics``; ``timing``; ``figures`` (if drawn).
+        ``files``: name -> path; ``statistics``; ``timing``; ``figures`` (if drawn);
+        ``physics`` (its statistics, if run).
     """
+    import shutil
+    import tempfile
+
     from eval.statistics import study_statistics
     from eval.tables import paired_csv, summary_csv, summary_markdown, table4_markdown
 
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    config = result.config
-    statistics = study_statistics(result.pairs, result.real, config.methods, config.windows,
-                                  config.seed)
-    document = results_document(result, statistics)
-    files = {name: out / name for name in ("results.json", "summary.csv", "paired.csv",
-                                            "summary.md", "timing.json", "table4.md")}
-    with atomic_open(files["results.json"], "w", encoding="utf-8", newline="\n") as handle:
-        json.dump(document, handle, indent=1)
-        handle.write("\n")
-    atomic_write_text(files["summary.csv"], summary_csv(statistics))
-    atomic_write_text(files["paired.csv"], paired_csv(statistics))
-    atomic_write_text(files["summary.md"], summary_markdown(document, statistics))
-    timing = timing_document(result)
-    atomic_write_text(files["timing.json"], json.dumps(timing, indent=1) + "\n")
-    atomic_write_text(files["table4.md"], table4_markdown(timing))
-    report = {"files": {k: str(v) for k, v in files.items()}, "statistics": statistics,
-              "timing": timing}
-    if figures:
-        drawn = write_figures(result, statistics, out)
-        report["figures"] = drawn
-        report["files"].update({k: str(out / v) for k, v in drawn["paths"].items()})
-        atomic_write_text(out / "figures.json", json.dumps(drawn, indent=1) + "\n")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}-incomplete-", dir=out.parent))
+    try:
+        config = result.config
+        statistics = study_statistics(result.pairs, result.real, config.methods,
+                                      config.windows, config.seed)
+        document = results_document(result, statistics)
+        markdown = summary_markdown(document, statistics)
+        names = ["results.json", "summary.csv", "paired.csv", "summary.md", "timing.json",
+                 "table4.md"]
+        report = {"statistics": statistics}
+        if physics is not None:
+            from eval.physics_report import physics_markdown, plot_physics
+
+            document["physics"] = physics_document(physics)
+            markdown += "\n" + physics_markdown(physics.statistics, config.methods,
+                                                 config.windows, physics.pairs)
+            atomic_write_text(stage / "physics.csv", physics.records.to_csv())
+            names.append("physics.csv")
+            report["physics"] = physics.statistics
+            if figures:
+                plot_physics(stage / "physics.png", physics.statistics,
+                             figure_window(config.windows), config.methods)
+                names.append("physics.png")
+        with atomic_open(stage / "results.json", "w", encoding="utf-8",
+                         newline="\n") as handle:
+            json.dump(document, handle, indent=1)
+            handle.write("\n")
+        atomic_write_text(stage / "summary.csv", summary_csv(statistics))
+        atomic_write_text(stage / "paired.csv", paired_csv(statistics))
+        atomic_write_text(stage / "summary.md", markdown)
+        timing = timing_document(result)
+        report["timing"] = timing
+        atomic_write_text(stage / "timing.json", json.dumps(timing, indent=1) + "\n")
+        atomic_write_text(stage / "table4.md", table4_markdown(timing))
+        if figures:
+            drawn = write_figures(result, statistics, stage)
+            report["figures"] = drawn
+            names += [*drawn["paths"].values(), "figures.json"]
+            atomic_write_text(stage / "figures.json", json.dumps(drawn, indent=1) + "\n")
+        out.mkdir(parents=True, exist_ok=True)
+        for name in names:
+            os.replace(stage / name, out / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    report["files"] = {name: str(out / name) for name in names}
     return report
+
+
+def physics_document(physics) -> dict:
+    """The free-root test in results.json: protocol, metric definitions, statistics."""
+    from eval.physics import CONTEXT_S, PHYSICS_METRICS
+
+    return {
+        "protocol": {
+            "pairs": physics.pairs,
+            "context_s": CONTEXT_S,
+            "controller": "controller.balance.follow: free root, no external force, "
+                          "whole-body inverse dynamics with floor contacts in friction "
+                          "pyramids and each joint's strength",
+            "real_windows": {str(k): len(v) for k, v in physics.real_windows.items()},
+            "records": "physics.csv (kind, id, window, method, metric, value)",
+        },
+        "metrics": {name: {"unit": m.unit, "better": m.better,
+                           "description": m.description}
+                    for name, m in PHYSICS_METRICS.items()},
+        "statistics": physics.statistics,
+    }

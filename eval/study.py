@@ -4,8 +4,8 @@ the humanoid, and the real windows that calibrate the scores (SPEC section 7).
 :func:`run_study` trains (or takes from the cache) the UPM and the SOM on the train split,
 fits the two ablations (``classnn``, ``snap``) on the same postures, draws the pairs
 (:mod:`eval.pairs`), and scores every method x window of every pair and every real window
-(:func:`eval.scoring.score_window`), in parallel over pairs with
-``concurrent.futures.ProcessPoolExecutor``. The scores do not depend on the number of
+(:func:`eval.scoring.score_window`), in parallel over pairs through an executor
+(:mod:`eval.executor`: a local process pool, or Ray). The scores do not depend on the number of
 workers: each task is a pure function of its pair, and the results are sorted by id.
 BLAS runs single-threaded in every process (the arrays are small; with several threads
 the spacetime optimisation ran up to 30x slower on a loaded machine).
@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -202,7 +201,7 @@ def score_real(data: StudyData, window: RealWindow) -> dict:
 _DATA: StudyData | None = None
 
 
-def _single_threaded_blas() -> None:
+def single_threaded_blas() -> None:
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
     from threadpoolctl import threadpool_limits
@@ -212,7 +211,7 @@ def _single_threaded_blas() -> None:
 
 def _init_worker(config: StudyConfig) -> None:
     global _DATA
-    _single_threaded_blas()
+    single_threaded_blas()
     if _DATA is None or _DATA.config != config:
         _DATA = prepare(config)
 
@@ -221,12 +220,9 @@ def _task(kind: str, item):
     return kind, (score_pair(_DATA, item) if kind == "pair" else score_real(_DATA, item))
 
 
-def _pool_context():
-    import multiprocessing
-
-    # fork shares the loaded maps with the workers; elsewhere they load them from the cache.
-    methods = multiprocessing.get_all_start_methods()
-    return multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+def _task_key(kind: str, item) -> str:
+    """``pair/ID`` or ``real/L/ID``: what a failed task is reported as."""
+    return f"pair/{item.index}" if kind == "pair" else f"real/{item.frames}/{item.index}"
 
 
 def default_workers() -> int:
@@ -280,7 +276,8 @@ class StudyResult:
 
 
 def run_study(config: StudyConfig, workers: int | None = None,
-              show_progress: bool = True) -> StudyResult:
+              show_progress: bool = True, executor: str = "local",
+              address: str | None = None) -> StudyResult:
     """Run the study.
 
     Parameters
@@ -291,10 +288,20 @@ def run_study(config: StudyConfig, workers: int | None = None,
         process.
     show_progress : bool
         Progress bars on stderr (terminals only).
+    executor : str
+        Where the tasks run: ``"local"`` (a process pool) or ``"ray"``
+        (:mod:`eval.executor`).
+    address : str, optional
+        A Ray cluster's address (with ``executor="ray"``; else a local Ray instance).
 
     Returns
     -------
     StudyResult
+
+    Raises
+    ------
+    eval.physics.StudyIncomplete
+        If a task failed (each named): nothing is returned half-done.
     """
     from eval.realdata import FLAT_FLOOR_MAX_BW, floor_residuals
     from upm.progress import progress
@@ -307,7 +314,7 @@ def run_study(config: StudyConfig, workers: int | None = None,
         raise UsageError(f"no transition method {unknown[0]!r} (methods: {', '.join(METHODS)})")
     global _DATA
     start = time.perf_counter()
-    _single_threaded_blas()
+    single_threaded_blas()
     data = prepare(config, progress=show_progress)
     _DATA = data
     pairs = draw_pairs(data.lengths, config.pairs, config.seed)
@@ -316,23 +323,26 @@ def run_study(config: StudyConfig, workers: int | None = None,
     tasks = [("pair", p) for p in pairs] + [("real", w) for ws in real.values() for w in ws]
     workers = min(workers or default_workers(), len(tasks))
 
+    from eval.executor import make_executor
+    from eval.physics import StudyIncomplete
+
+    runner = make_executor(executor, workers, address, _init_worker, (config,))
+    keyed = [(_task_key(kind, item), (kind, item)) for kind, item in tasks]
     bar = progress(total=len(tasks), desc="scoring", unit="task",
                    disable=None if show_progress else True)
-    done = []
+    done, failures = [], []
     try:
-        if workers <= 1:
-            for kind, item in tasks:
-                done.append(_task(kind, item))
-                bar.update()
-        else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
-                                     initializer=_init_worker, initargs=(config,)) as pool:
-                futures = [pool.submit(_task, kind, item) for kind, item in tasks]
-                for future in as_completed(futures):
-                    done.append(future.result())
-                    bar.update()
+        for outcome in runner.run(_task, keyed):
+            if outcome.ok:
+                done.append(outcome.value)
+            else:
+                failures.append(f"{outcome.key}: {outcome.error}")
+            bar.update()
     finally:
         bar.close()
+    if failures:
+        raise StudyIncomplete(f"{len(failures)} of {len(tasks)} study tasks failed "
+                              f"(first: {failures[0]}); nothing was written")
 
     floor = floor_residuals(data.catalog, data.motions)
     clips = {name: {"subject": data.subject(name), "frames": data.lengths[name],

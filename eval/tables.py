@@ -258,9 +258,8 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
         "below 5 cm counts too, so real walks score well above zero; compare methods with "
         "each other and with the calibration row.",
         "- Tracking error: the humanoid's servos (human torque limits) follow the motion with "
-        "the root driven along it. Tracking with a free root is not compared: with no "
-        "balance control, open-loop tracking with the root free falls within 0.7-1.4 s "
-        "whatever it is given.",
+        "the root driven along it. With the root free, the balance controller performs "
+        "the window in the free-root test (`upm eval --physics`, its own section).",
     ]
     for frames in protocol["windows"]:
         best = best_baseline(statistics, frames, methods)
@@ -284,25 +283,36 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
             method_table(statistics, frames, methods,
                          ["residual_force_mean_bw", "residual_force_peak_bw"],
                          group="flat_floor"),
-            "",
-            "### UPM - linear, paired over pairs",
-            "",
-            "A tie is an equal value (e.g. both windows fully valid). Verdict: the 95 % "
-            "interval of the mean difference excludes 0.",
-            "",
-            paired_table(statistics, frames, "linear"),
-            "",
-            "### UPM - linear by group (difference [interval] (UPM wins/ties/losses))",
-            "",
-            f"A-B distance terciles cut at {statistics['groups']['ab_tercile_edges_deg']} "
-            "deg RMS.",
-            "",
-            group_table(statistics, frames, "linear", HEADLINE),
-            "",
-            "### UPM - every other method (all pairs)",
-            "",
-            versus_table(statistics, frames, others, HEADLINE),
         ]
+        if "upm" in methods and "linear" in methods:
+            parts += [
+                "",
+                "### UPM - linear, paired over pairs",
+                "",
+                "A tie is an equal value (e.g. both windows fully valid). Verdict: the 95 % "
+                "interval of the mean difference excludes 0.",
+                "",
+                paired_table(statistics, frames, "linear"),
+                "",
+                "### UPM - linear by group (difference [interval] (UPM wins/ties/losses))",
+                "",
+                f"A-B distance terciles cut at {statistics['groups']['ab_tercile_edges_deg']} "
+                "deg RMS.",
+                "",
+                group_table(statistics, frames, "linear", HEADLINE),
+            ]
+        if "upm" in methods and others:
+            parts += [
+                "",
+                "### UPM - every other method (all pairs)",
+                "",
+                versus_table(statistics, frames, others, HEADLINE),
+            ]
+        if "upm" not in methods:
+            parts += ["", "No paired tables: they compare every method with upm, which this "
+                          "run did not include."]
+        elif "linear" not in methods:
+            parts += ["", "No UPM - linear tables: this run did not include linear."]
         if best is not None:
             parts += ["", f"Best other baseline at this window (highest valid share among "
                           f"{', '.join(BASELINES)}): **{best}**."]
@@ -362,11 +372,12 @@ def table4_markdown(timing: dict) -> str:
 
 
 def headline_rows(statistics: dict, timing: dict, frames: int, methods) -> list[dict]:
-    """The headline for one window: UPM, linear, the best other baseline and the real
-    windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
+    """The headline for one window: feasible, UPM, linear, the best other baseline and
+    the real windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
     rows = statistics["summary"][str(frames)]["all"]
     best = best_baseline(statistics, frames, methods)
-    names = [m for m in ("upm", "linear") if m in methods] + ([best] if best else [])
+    names = [m for m in ("feasible", "upm", "linear") if m in methods] + (
+        [best] if best else [])
     out = []
     for name in names + ["real"]:
         entry = {"method": name if name != "real" else "real windows"}

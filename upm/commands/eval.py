@@ -22,8 +22,7 @@ method gets the same root (the velocity blend), so residual force and foot skati
 compare the joint angles; read the residual on the flat-floor pairs (the uneven-terrain
 walk, the step-up and the 60 fps jumps need about one body weight in the real data
 alone). Tracking: the humanoid's servos (human torque limits) follow each window with the
-root driven along it; the free-root simulation is not compared: with no balance control,
-open-loop tracking with the root free falls within 0.7-1.4 s whatever it is given.
+root driven along it.
 
 The output directory gets results.json (every pair, every method), summary.csv, paired.csv,
 summary.md (means with 95 % bootstrap intervals, UPM - X paired, by A-B distance
@@ -36,10 +35,18 @@ training the maps included); --full runs the whole protocol (200 pairs, windows 
 20 and 40 frames: about 4 minutes). The pairs of a smaller study are the first pairs of
 a larger one with the same seed, scored identically.
 
+The free-root test costs about a second of CPU per run (pairs x methods + real
+windows): --physics-pairs chooses how many of the pairs get it. It runs on a local
+process pool, or on Ray (--executor ray: a local Ray instance, or an existing cluster
+with --address). Finished runs are kept in OUT/physics-partial.jsonl as they come: if
+runs fail or the command is stopped, the same command completes only what is missing.
+
 Examples:
   upm eval --out upm-eval
   upm eval --full --out upm-eval-full
   upm eval --pairs 100 --windows 10,20 --seed 1 --workers 2 --out study
+  upm eval --physics --pairs 60 --out upm-eval-physics
+  upm eval --physics --pairs 60 --executor ray --address ray://head-node:10001
 """
 
 from __future__ import annotations
@@ -80,6 +87,17 @@ def configure(parser) -> None:
                              "subprocesses). The numbers do not depend on it.")
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="skip the figures (no rendering)")
+    parser.add_argument("--physics", action="store_true",
+                        help="add the free-root test: the balance controller performs every "
+                             "window (about 1 s of CPU per pair x method)")
+    parser.add_argument("--physics-pairs", type=int, metavar="N", default=None,
+                        help="pairs that get the free-root test: the study's first N "
+                             "(default: all of --pairs)")
+    parser.add_argument("--executor", choices=("local", "ray"), default="local",
+                        help="where the work runs: a local process pool (default) or Ray")
+    parser.add_argument("--address", metavar="ADDR", default=None,
+                        help="an existing Ray cluster (e.g. ray://head:10001); default with "
+                             "--executor ray: a local Ray instance with --workers CPUs")
 
 
 def parse_windows(text: str | None, default) -> tuple[int, ...]:
@@ -129,13 +147,36 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
+    physics_pairs = args.physics_pairs if args.physics_pairs is not None else pairs
+    if args.physics_pairs is not None and not args.physics:
+        raise UsageError("--physics-pairs goes with --physics")
+    if not 1 <= physics_pairs <= pairs:
+        raise UsageError(f"--physics-pairs must be between 1 and --pairs ({pairs}), "
+                         f"not {physics_pairs}")
+    if args.address and args.executor != "ray":
+        raise UsageError("--address goes with --executor ray")
+    if args.executor == "ray":
+        from eval.executor import import_ray
+
+        import_ray()
     catalog = Catalog(args.data)
     config = StudyConfig(data_dir=str(catalog.root), pairs=pairs, windows=windows,
                          seed=args.seed, methods=methods)
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
           f"{','.join(map(str, windows))}, seed {args.seed}", file=sys.stderr)
-    result = run_study(config, workers=args.workers)
-    report = write_outputs(result, out, figures=args.figures)
+    result = run_study(config, workers=args.workers, executor=args.executor,
+                       address=args.address)
+    physics = None
+    if args.physics:
+        from eval.physics import run_physics
+
+        print(f"upm eval: free-root test on {physics_pairs} pairs x {len(methods)} methods "
+              f"+ real windows ({args.executor})", file=sys.stderr)
+        physics = run_physics(result, physics_pairs, out, executor=args.executor,
+                              address=args.address, workers=args.workers)
+    report = write_outputs(result, out, figures=args.figures, physics=physics)
+    if physics is not None:
+        physics.checkpoint.remove()
 
     frames = figure_window(windows)
     print(f"Held-out study: {pairs} pairs, window {frames} frames at 120 fps "
@@ -154,6 +195,15 @@ def run(args) -> int:
     ratio = report["timing"]["spacetime_over_upm"].get(str(frames))
     if ratio is not None:
         print(f"spacetime / UPM time per transition: {ratio:.1f}x (Table 4: table4.md)")
+    if physics is not None:
+        from eval.physics_report import physics_text
+
+        print(f"Free-root test: {physics_pairs} pairs, window {frames} frames (the balance "
+              f"controller, {physics.workers} {physics.executor} workers, "
+              f"{physics.wall_s:.0f} s" + (f", {physics.resumed} runs resumed" if
+                                           physics.resumed else "") + "):")
+        print(physics_text(physics.statistics, frames, methods))
     print(f"written to {out}/: results.json, summary.csv, paired.csv, summary.md, "
-          f"timing.json, table4.md" + (", figures (*.png)" if args.figures else ""))
+          f"timing.json, table4.md" + (", physics.csv" if physics is not None else "")
+          + (", figures (*.png)" if args.figures else ""))
     return 0

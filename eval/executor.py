@@ -1,0 +1,174 @@
+"""Where the study's units of work run: one interface, a local process pool or Ray.
+
+A task is ``(key, args)``; the executor calls ``fn(*args)`` for each, in a process where
+``initializer(*initargs)`` has run (once per process), and yields a :class:`Outcome` per
+task as it finishes: its value, or the error it raised (never dropped). Results do not
+depend on the executor or the number of workers: each task is a pure function of its
+arguments, and callers order the outcomes by key.
+
+- :class:`LocalExecutor`: ``concurrent.futures.ProcessPoolExecutor`` (fork where the
+  platform has it, so loaded data is shared), or this process for one worker.
+- :class:`RayExecutor`: `Ray <https://docs.ray.io>`_ tasks — an existing cluster at
+  ``address`` (``ray://host:10001`` or ``host:6379``), else a local Ray instance with
+  ``workers`` CPUs, shut down afterwards. A task whose worker process dies is retried by
+  Ray (:data:`RAY_RETRIES`); a task that raises is reported, not retried (the study's
+  tasks are deterministic: the same error would come again).
+"""
+
+from __future__ import annotations
+
+import traceback
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+
+#: Executors by name (``upm eval --executor``).
+EXECUTORS = ("local", "ray")
+#: Retries of a Ray task whose worker process died (machine lost, out of memory).
+RAY_RETRIES = 2
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One finished task.
+
+    Attributes
+    ----------
+    key : str
+    value : object
+        What the task returned (None if it failed).
+    error : str or None
+        ``"ExceptionType: message"`` if it failed.
+    """
+
+    key: str
+    value: object = None
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def _describe(exc: BaseException) -> str:
+    lines = traceback.format_exception_only(type(exc), exc)
+    return " ".join(line.strip() for line in lines)[:500]
+
+
+def _call(initializer, initargs, fn, args):
+    if initializer is not None:
+        initializer(*initargs)
+    return fn(*args)
+
+
+class LocalExecutor:
+    """A local process pool (``workers`` processes; 1 runs the tasks in this process)."""
+
+    name = "local"
+
+    def __init__(self, workers: int, initializer: Callable | None = None,
+                 initargs: tuple = ()):
+        self.workers = max(1, int(workers))
+        self.initializer = initializer
+        self.initargs = initargs
+
+    def run(self, fn: Callable, tasks: Iterable[tuple[str, tuple]]) -> Iterator[Outcome]:
+        tasks = list(tasks)
+        if self.workers == 1 or len(tasks) <= 1:
+            if self.initializer is not None and tasks:
+                self.initializer(*self.initargs)
+            for key, args in tasks:
+                try:
+                    yield Outcome(key, fn(*args))
+                except Exception as exc:  # reported with its key, never dropped
+                    yield Outcome(key, error=_describe(exc))
+            return
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        methods = multiprocessing.get_all_start_methods()
+        context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+        with ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)),
+                                 mp_context=context, initializer=self.initializer,
+                                 initargs=self.initargs) as pool:
+            futures = {pool.submit(fn, *args): key for key, args in tasks}
+            for future in as_completed(futures):
+                try:
+                    yield Outcome(futures[future], future.result())
+                except Exception as exc:
+                    yield Outcome(futures[future], error=_describe(exc))
+
+
+class RayExecutor:
+    """Ray tasks on the cluster at ``address``, else on a local Ray instance."""
+
+    name = "ray"
+
+    def __init__(self, workers: int, address: str | None = None,
+                 initializer: Callable | None = None, initargs: tuple = ()):
+        self.workers = max(1, int(workers))
+        self.address = address
+        self.initializer = initializer
+        self.initargs = initargs
+
+    def run(self, fn: Callable, tasks: Iterable[tuple[str, tuple]]) -> Iterator[Outcome]:
+        import os
+        import sys
+
+        ray = import_ray()
+        tasks = list(tasks)
+        started = not ray.is_initialized()
+        if started:
+            # Workers import this project as the driver does (an editable install or the
+            # driver's PYTHONPATH), with one BLAS thread each.
+            paths = [p for p in sys.path if p and os.path.isdir(p)]
+            env = {"PYTHONPATH": os.pathsep.join(paths), "OMP_NUM_THREADS": "1",
+                   "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+            options = {"include_dashboard": False, "log_to_driver": False,
+                       "runtime_env": {"env_vars": env}}
+            if self.address:
+                ray.init(address=self.address, **options)
+            else:
+                ray.init(num_cpus=self.workers, **options)
+        try:
+            remote = ray.remote(max_retries=RAY_RETRIES, retry_exceptions=False)(_call)
+            pending = {remote.remote(self.initializer, self.initargs, fn, args): key
+                       for key, args in tasks}
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                for ref in ready:
+                    key = pending.pop(ref)
+                    try:
+                        yield Outcome(key, ray.get(ref))
+                    except ray.exceptions.RayTaskError as exc:
+                        yield Outcome(key, error=_describe(exc.cause or exc))
+                    except ray.exceptions.RayError as exc:  # lost worker after retries
+                        yield Outcome(key, error=_describe(exc))
+        finally:
+            if started:
+                ray.shutdown()
+
+
+def import_ray():
+    """The ``ray`` module, or a one-line UsageError saying how to install it."""
+    try:
+        import ray
+    except ImportError:
+        from upm.errors import UsageError
+
+        raise UsageError("--executor ray needs Ray: pip install -e '.[ray]' (or "
+                         "pip install 'ray>=2.9')") from None
+    return ray
+
+
+def make_executor(name: str, workers: int, address: str | None = None,
+                  initializer: Callable | None = None, initargs: tuple = ()):
+    """The executor called ``name`` (:data:`EXECUTORS`)."""
+    from upm.errors import UsageError
+
+    if name == "local":
+        if address:
+            raise UsageError("--address goes with --executor ray")
+        return LocalExecutor(workers, initializer, initargs)
+    if name == "ray":
+        return RayExecutor(workers, address, initializer, initargs)
+    raise UsageError(f"no executor {name!r} (executors: {', '.join(EXECUTORS)})")

@@ -1,0 +1,455 @@
+"""Can the character perform the transition? The study's free-root test (``--physics``).
+
+For every pair x method x window (and every real window of the calibration row), the
+balance controller (:func:`controller.balance.follow`: root free, no external force, the
+humanoid's own joint strength) follows the motion from :data:`CONTEXT_S` before the window
+to :data:`CONTEXT_S` after it — the same context for every method: clip 1's own frames
+before, clip 2's after — and the figures of :data:`PHYSICS_METRICS` are recorded: whether
+the character fell (anywhere in the run) and when relative to the window's first frame,
+and, over the window's frames before any fall, how far it was from the method's own motion
+(joint angles, body positions), how far it drifted, how often it asked for more torque
+than the joint has and the peak floor force.
+
+A unit of work is one (pair or real window, method, window length): :func:`task_list`
+names them, :func:`run_unit` runs one in a worker (:mod:`eval.executor`: a local pool or
+Ray). Finished units are appended to a checkpoint file in the output directory as they
+come (:class:`Checkpoint`), so a run that fails or is stopped keeps them and the same
+command completes only what is missing. The figures are deterministic (the controller has
+no randomness), whatever the executor and the number of workers.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from eval.records import REAL, Records
+from upm.errors import UpmError
+
+#: Seconds of the motion simulated before and after the window.
+CONTEXT_S = 0.5
+CHECKPOINT_NAME = "physics-partial.jsonl"
+CHECKPOINT_FORMAT = "upm-controller/physics-checkpoint"
+CHECKPOINT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class PhysicsMetric:
+    """One figure of the free-root test.
+
+    Attributes
+    ----------
+    name, unit, label : str
+    better : str
+        ``"lower"`` (every figure here: fewer falls, smaller errors).
+    description : str
+    """
+
+    name: str
+    unit: str
+    label: str
+    description: str
+    better: str = "lower"
+
+
+_METRICS = (
+    PhysicsMetric("fell", "share", "falls %",
+                  "1 if the character fell during the run (before, in or after the window)"),
+    PhysicsMetric("fall_after_window_start_s", "s", "fall time s",
+                  "when it fell, seconds after the window's first frame (negative: "
+                  "before the window); NaN if it did not"),
+    PhysicsMetric("joint_error_deg_rms", "deg", "joint error °",
+                  "RMS over the window's frames before any fall of the hinges' error"),
+    PhysicsMetric("body_error_mm_mean", "mm", "body error mm",
+                  "mean joint-centre position error relative to the pelvis, heading "
+                  "removed (controller.balance)"),
+    PhysicsMetric("body_error_mm_peak", "mm", "body error peak mm",
+                  "peak of the same over the window"),
+    PhysicsMetric("root_drift_m", "m", "root drift m",
+                  "largest horizontal pelvis distance from the motion's, since the run's start"),
+    PhysicsMetric("torque_saturation_share", "share", "torque saturated %",
+                  "share of joint x frame samples where the controller asked for more "
+                  "than the joint's strength"),
+    PhysicsMetric("contact_force_peak_bw", "bw", "floor force peak bw",
+                  "peak total normal floor force, body weights"),
+)
+#: The free-root figures, by name: the one registry every writer reads.
+PHYSICS_METRICS = {m.name: m for m in _METRICS}
+#: Shares shown as percentages in the tables.
+PERCENT = frozenset({"fell", "torque_saturation_share"})
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One unit of work: a pair (or real window) by one method at one window length."""
+
+    kind: str
+    index: int
+    window: int
+    method: str
+
+    @property
+    def key(self) -> str:
+        return f"{self.kind}/{self.index}/{self.window}/{self.method}"
+
+    def describe(self) -> str:
+        what = f"pair {self.index}" if self.kind == "pair" else f"real window {self.index}"
+        return f"{what}, {self.method}, L = {self.window}"
+
+
+def task_list(pairs, real_windows: dict, methods, windows) -> list[Unit]:
+    """Every unit of the free-root test, in a fixed order.
+
+    Parameters
+    ----------
+    pairs : list of eval.pairs.Pair
+    real_windows : dict of int to list of eval.pairs.RealWindow
+    methods : sequence of str
+    windows : sequence of int
+    """
+    units = [Unit("pair", p.index, frames, m) for frames in windows for p in pairs
+             for m in methods]
+    units += [Unit("real", w.index, frames, REAL) for frames in windows
+              for w in real_windows[frames]]
+    return units
+
+
+def context_frames(fps: float) -> int:
+    """Frames of :data:`CONTEXT_S` at ``fps``."""
+    return int(round(CONTEXT_S * fps))
+
+
+def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
+    """The motion a unit simulates and where its window lies in it.
+
+    Returns
+    -------
+    model : mujoco.MjModel
+    motion : upm.Motion
+        From :data:`CONTEXT_S` before the window to :data:`CONTEXT_S` after it (less where
+        the clip is shorter).
+    start, stop : int
+        The window's frames in ``motion``.
+    """
+    from eval.study import make_transition
+
+    if unit.kind == "pair":
+        pair = pairs[unit.index]
+        t = make_transition(data, pair, unit.method, unit.window)
+        motion, window, clip = t.motion, t.window, pair.first.clip
+    else:
+        w = next(w for w in real_windows[unit.window] if w.index == unit.index)
+        motion, window, clip = data.motions[w.clip], slice(w.start, w.stop), w.clip
+    c = context_frames(motion.fps)
+    lo, hi = max(0, window.start - c), min(motion.n_frames, window.stop + c)
+    return data.model(clip), motion.frames(lo, hi), window.start - lo, window.stop - lo
+
+
+def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
+    """Run the balance controller over ``motion`` and the figures of its window."""
+    from controller import to_qpos
+    from controller.balance import follow, window_summary
+
+    run = follow(model, to_qpos(model, motion), motion.fps)
+    summary = window_summary(run, start, stop)
+    fell = run.fall_frame is not None
+    return {
+        "fell": 1.0 if fell else 0.0,
+        "fall_after_window_start_s": ((run.fall_frame - start) / motion.fps if fell
+                                      else math.nan),
+        **{name: summary[name] for name in PHYSICS_METRICS
+           if name not in ("fell", "fall_after_window_start_s")},
+    }
+
+
+# --- in the workers -------------------------------------------------------------------------
+
+_WORKER: dict = {}
+
+
+def init_worker(config, pairs: dict, real_windows: dict) -> None:
+    """Load the study's data once per worker process (idempotent)."""
+    from eval.study import prepare, single_threaded_blas
+
+    if _WORKER.get("config") != config:
+        single_threaded_blas()
+        _WORKER.update(config=config, data=prepare(config), pairs=pairs,
+                       real_windows=real_windows)
+
+
+def run_unit(unit: Unit) -> dict[str, float]:
+    """One unit in a worker (after :func:`init_worker`)."""
+    model, motion, start, stop = unit_motion(_WORKER["data"], unit, _WORKER["pairs"],
+                                             _WORKER["real_windows"])
+    return simulate_unit(model, motion, start, stop)
+
+
+# --- the checkpoint -------------------------------------------------------------------------
+
+
+class Checkpoint:
+    """Finished units, one JSON line each, in ``DIR/physics-partial.jsonl``.
+
+    The first line states the settings the figures depend on; a file with other settings
+    is not reused (it is replaced when the run starts).
+    """
+
+    def __init__(self, out_dir, settings: dict):
+        self.path = Path(out_dir) / CHECKPOINT_NAME
+        self.settings = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
+                         **settings}
+        self.done: dict[str, dict[str, float]] = {}
+        self._handle = None
+
+    def load(self) -> int:
+        """Read the finished units of an earlier run with the same settings (count)."""
+        if not self.path.is_file():
+            return 0
+        lines = self.path.read_text(encoding="utf-8").splitlines()
+        try:
+            if not lines or json.loads(lines[0]) != self.settings:
+                return 0
+            for line in lines[1:]:
+                entry = json.loads(line)
+                self.done[entry["key"]] = {k: (math.nan if v is None else float(v))
+                                           for k, v in entry["metrics"].items()}
+        except (ValueError, KeyError, TypeError, AttributeError):
+            # A line cut short by a crash: keep what was read before it.
+            pass
+        return len(self.done)
+
+    def open(self) -> None:
+        """Start appending (rewriting the file with what was loaded)."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        with open(tmp, "w", encoding="utf-8") as handle:
+            handle.write(json.dumps(self.settings) + "\n")
+            for key, metrics in self.done.items():
+                handle.write(_line(key, metrics))
+        os.replace(tmp, self.path)
+        self._handle = open(self.path, "a", encoding="utf-8")
+
+    def add(self, key: str, metrics: dict[str, float]) -> None:
+        self.done[key] = metrics
+        self._handle.write(_line(key, metrics))
+        self._handle.flush()
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._handle.close()
+            self._handle = None
+
+    def remove(self) -> None:
+        self.close()
+        self.path.unlink(missing_ok=True)
+
+
+def _line(key: str, metrics: dict[str, float]) -> str:
+    clean = {k: (None if not math.isfinite(v) else v) for k, v in metrics.items()}
+    return json.dumps({"key": key, "metrics": clean}) + "\n"
+
+
+def records_of(units: list[Unit], done: dict[str, dict[str, float]]) -> Records:
+    """The long-form table of finished units."""
+    records = Records(PHYSICS_METRICS)
+    for unit in units:
+        records.add(unit.kind, unit.index, unit.window, unit.method, done[unit.key])
+    return records
+
+
+# --- statistics -----------------------------------------------------------------------------
+
+
+def physics_statistics(records: Records, pair_records: list[dict], real_flat: dict, methods,
+                       windows, seed: int, reference: str = "upm") -> dict:
+    """Intervals per method (and the real windows) and paired ``reference`` - X.
+
+    Means and intervals are over the units where a figure exists (errors: the window
+    frames before a fall; a unit that fell before its window has none): ``n`` says how
+    many. Paired differences use the pairs where both methods have the figure.
+    ``real_flat``: per window length, whether each real window's clip has a flat floor
+    (:func:`real_flat_floor`).
+
+    Returns
+    -------
+    dict
+        ``summary`` ``{L: {group: {method | "real": {metric: interval}}}}`` (groups
+        ``all`` and ``flat_floor``), ``paired`` ``{L: {X: {group: {metric:
+        comparison}}}}`` (every group of :func:`eval.statistics.pair_groups`; empty when
+        ``reference`` is not among the methods), ``reference``.
+    """
+    from eval.statistics import bootstrap_mean, compare, pair_groups
+
+    ids = [p["id"] for p in pair_records]
+    groups, _ = pair_groups(pair_records)
+    out = {"reference": reference if reference in methods else None, "summary": {},
+           "paired": {}}
+    for frames in windows:
+        real_ids = records.ids("real", frames, REAL)
+        flat_real = real_flat.get(frames, {})
+        summary = {}
+        for group in ("all", "flat_floor"):
+            chosen = [i for i, keep in zip(ids, groups[group], strict=True) if keep]
+            rows = {}
+            for m in methods:
+                rows[m] = {}
+                for metric in PHYSICS_METRICS:
+                    v = records.values("pair", frames, m, metric, chosen)
+                    rows[m][metric] = bootstrap_mean(v[np.isfinite(v)], seed).as_dict()
+            real_chosen = real_ids if group == "all" else [
+                i for i in real_ids if flat_real.get(i, True)]
+            rows[REAL] = {}
+            for metric in PHYSICS_METRICS:
+                v = records.values("real", frames, REAL, metric, real_chosen)
+                rows[REAL][metric] = bootstrap_mean(v[np.isfinite(v)], seed).as_dict()
+            summary[group] = rows
+        out["summary"][str(frames)] = summary
+        if reference not in methods:
+            continue
+        paired = {}
+        for other in (m for m in methods if m != reference):
+            paired[other] = {}
+            for group, mask in groups.items():
+                chosen = [i for i, keep in zip(ids, mask, strict=True) if keep]
+                paired[other][group] = {}
+                for metric, spec in PHYSICS_METRICS.items():
+                    a = records.values("pair", frames, reference, metric, chosen)
+                    b = records.values("pair", frames, other, metric, chosen)
+                    both = np.isfinite(a) & np.isfinite(b)
+                    paired[other][group][metric] = compare(a[both], b[both], spec.better,
+                                                           seed).as_dict()
+        out["paired"][str(frames)] = paired
+    return out
+
+
+def real_flat_floor(real_windows: dict, clips: dict) -> dict[int, dict[int, bool]]:
+    """Per window length, whether each real window's clip has a flat floor."""
+    return {frames: {w.index: bool(clips[w.clip]["flat_floor"]) for w in ws}
+            for frames, ws in real_windows.items()}
+
+
+# --- the run --------------------------------------------------------------------------------
+
+
+class StudyIncomplete(UpmError):
+    """Some units failed; the finished ones are kept in the checkpoint."""
+
+
+@dataclass
+class PhysicsResult:
+    """The free-root test of a study.
+
+    Attributes
+    ----------
+    records : eval.records.Records
+        Long-form: every unit's :data:`PHYSICS_METRICS`.
+    statistics : dict
+        :func:`physics_statistics`.
+    pairs : int
+        Pairs tested (the study's first ones).
+    real_windows : dict of int to list of eval.pairs.RealWindow
+    checkpoint : Checkpoint
+    resumed : int
+        Units taken from an earlier run's checkpoint.
+    executor : str
+    workers : int
+    wall_s : float
+        Wall time of the units run now.
+    """
+
+    records: Records
+    statistics: dict
+    pairs: int
+    real_windows: dict
+    checkpoint: Checkpoint
+    resumed: int
+    executor: str
+    workers: int
+    wall_s: float
+
+
+def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
+                address: str | None = None, workers: int | None = None,
+                show_progress: bool = True) -> PhysicsResult:
+    """Run the free-root test on the first ``n_pairs`` pairs of a study.
+
+    Parameters
+    ----------
+    result : eval.study.StudyResult
+        The kinematic study (its pairs, data and settings).
+    n_pairs : int
+        At most the study's pairs.
+    out_dir : path-like
+        Where the checkpoint lives (the study's output directory).
+    executor : str
+        ``"local"`` or ``"ray"`` (:mod:`eval.executor`).
+    address : str, optional
+        A Ray cluster (with ``executor="ray"``).
+    workers : int, optional
+        Processes (local) or CPUs of a local Ray instance; default: the usable cores.
+
+    Raises
+    ------
+    StudyIncomplete
+        If units failed: each named with its error; the finished ones stay in the
+        checkpoint and the same command completes the rest.
+    """
+    import time
+
+    from eval.executor import make_executor
+    from eval.pairs import draw_real_windows
+    from eval.study import default_workers, pair_by_id
+    from upm.progress import progress
+
+    config = result.config
+    data = result.data
+    pairs = {i: pair_by_id(result, i) for i in range(n_pairs)}
+    context = context_frames(120.0)
+    real_windows = {frames: draw_real_windows(data.lengths, n_pairs, frames, config.seed,
+                                              context=context)
+                    for frames in config.windows}
+    units = task_list(list(pairs.values()), real_windows, config.methods, config.windows)
+    checkpoint = Checkpoint(out_dir, {"data": Path(config.data_dir).name, "seed": config.seed,
+                                      "context_s": CONTEXT_S, "alpha": config.as_dict()["alpha"]})
+    resumed = checkpoint.load()
+    todo = [u for u in units if u.key not in checkpoint.done]
+    workers = max(1, min(workers or default_workers(), max(1, len(todo))))
+    # This process already holds the data: forked workers inherit it.
+    _WORKER.update(config=config, data=data, pairs=pairs, real_windows=real_windows)
+    runner = make_executor(executor, workers, address, init_worker,
+                           (config, pairs, real_windows))
+    failures = []
+    start = time.perf_counter()
+    checkpoint.open()
+    bar = progress(total=len(todo), desc="free-root test", unit="run",
+                   disable=None if show_progress else True)
+    by_key = {u.key: u for u in todo}
+    try:
+        for outcome in runner.run(run_unit, [(u.key, (u,)) for u in todo]):
+            if outcome.ok:
+                checkpoint.add(outcome.key, outcome.value)
+            else:
+                failures.append((by_key[outcome.key], outcome.error))
+            bar.update()
+    finally:
+        bar.close()
+        checkpoint.close()
+    wall = time.perf_counter() - start
+    if failures:
+        first, error = failures[0]
+        raise StudyIncomplete(
+            f"{len(failures)} of {len(units)} free-root runs failed (first: "
+            f"{first.describe()}: {error}); the {len(checkpoint.done)} finished are kept in "
+            f"{checkpoint.path}: run the same command again to complete the rest")
+    records = records_of(units, checkpoint.done)
+    statistics = physics_statistics(records, result.pairs[:n_pairs],
+                                    real_flat_floor(real_windows, result.clips),
+                                    config.methods, config.windows, config.seed)
+    return PhysicsResult(records=records, statistics=statistics, pairs=n_pairs,
+                         real_windows=real_windows, checkpoint=checkpoint, resumed=resumed,
+                         executor=executor, workers=workers, wall_s=wall)

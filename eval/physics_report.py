@@ -1,0 +1,133 @@
+"""The free-root test's tables and figure (from :func:`eval.physics.physics_statistics`)."""
+
+from __future__ import annotations
+
+import os
+
+from eval.physics import CONTEXT_S, PERCENT, PHYSICS_METRICS
+from eval.records import REAL
+
+#: The columns of the Markdown and terminal tables.
+TABLE_METRICS = ("fell", "joint_error_deg_rms", "body_error_mm_mean", "root_drift_m",
+                 "torque_saturation_share", "contact_force_peak_bw")
+
+
+def _fmt(metric: str, value, signed: bool = False) -> str:
+    if value is None:
+        return "-"
+    scale = 100.0 if metric in PERCENT else 1.0
+    decimals = 0 if metric in ("body_error_mm_mean", "body_error_mm_peak") else (
+        1 if metric in PERCENT or metric.endswith("_deg_rms") else 2)
+    return f"{value * scale:{'+' if signed else ''}.{decimals}f}"
+
+
+def cell(metric: str, iv: dict, signed: bool = False) -> str:
+    """``mean [lo, hi] (n)`` in display units (percent for shares)."""
+    if not iv["n"]:
+        return "-"
+    mean = iv.get("mean", iv.get("mean_diff"))
+    return (f"{_fmt(metric, mean, signed)} [{_fmt(metric, iv['lo'], signed)}, "
+            f"{_fmt(metric, iv['hi'], signed)}]")
+
+
+def label(metric: str) -> str:
+    return PHYSICS_METRICS[metric].label
+
+
+def method_rows(statistics: dict, frames: int, methods, group: str = "all") -> list[list[str]]:
+    """Per method (then the real windows): the :data:`TABLE_METRICS` cells."""
+    rows_in = statistics["summary"][str(frames)][group]
+    rows = []
+    for name in [*methods, REAL]:
+        shown = "real windows (calibration)" if name == REAL else name
+        n = rows_in[name]["fell"]["n"]
+        rows.append([f"{shown} (n={n})"] + [cell(m, rows_in[name][m]) for m in TABLE_METRICS])
+    return rows
+
+
+def _table(header, rows) -> str:
+    lines = ["| " + " | ".join(header) + " |",
+             "|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def physics_markdown(statistics: dict, methods, windows, n_pairs: int) -> str:
+    """The free-root section of summary.md."""
+    reference = statistics.get("reference")
+    parts = [
+        "## Can the character perform it? The free-root test",
+        "",
+        f"The first {n_pairs} pairs (and as many real windows): the balance controller "
+        f"(controller.balance: root free, no external force, each joint's strength) follows "
+        f"each method's motion from {CONTEXT_S:g} s before the window to {CONTEXT_S:g} s "
+        f"after it. Falls: share of runs in which the character fell (anywhere in the run); "
+        f"errors over the window's frames before any fall, against the method's own motion "
+        f"(n: runs with such frames). Mean [95 % bootstrap interval].",
+    ]
+    for frames in windows:
+        parts += ["", f"### Window of {frames} frames", "",
+                  _table(["method"] + [label(m) for m in TABLE_METRICS],
+                         method_rows(statistics, frames, methods))]
+        paired = statistics["paired"].get(str(frames))
+        if paired:
+            rows = []
+            for other, groups in paired.items():
+                row = [f"{reference} - {other}"]
+                for metric in TABLE_METRICS:
+                    c = groups["all"][metric]
+                    iv = {"mean_diff": c["mean_diff"], "lo": c["lo"], "hi": c["hi"],
+                          "n": c["n"]}
+                    row.append(f"{cell(metric, iv, signed=True)} "
+                               f"({c['wins']}/{c['ties']}/{c['losses']})")
+                rows.append(row)
+            parts += ["", f"Paired over pairs ({reference} wins/ties/losses; lower is better "
+                          f"for every column):", "",
+                      _table(["comparison"] + [label(m) for m in TABLE_METRICS], rows)]
+    return "\n".join(parts) + "\n"
+
+
+def physics_text(statistics: dict, frames: int, methods) -> str:
+    """The free-root headline for the terminal."""
+    header = ["method"] + [label(m) for m in TABLE_METRICS]
+    cells = method_rows(statistics, frames, methods)
+    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
+    return "\n".join(lines)
+
+
+def plot_physics(path: str | os.PathLike, statistics: dict, frames: int, methods) -> None:
+    """Fall rate and joint error per method beside the real windows (bars with 95 %
+    intervals)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = statistics["summary"][str(frames)]["all"]
+    names = [*methods, REAL]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    for ax, metric in zip(axes, ("fell", "joint_error_deg_rms", "body_error_mm_mean"),
+                          strict=True):
+        scale = 100.0 if metric in PERCENT else 1.0
+        means, los, his = [], [], []
+        for name in names:
+            iv = rows[name][metric]
+            m = iv["mean"] if iv["mean"] is not None else float("nan")
+            means.append(m * scale)
+            los.append((m - (iv["lo"] if iv["lo"] is not None else m)) * scale)
+            his.append(((iv["hi"] if iv["hi"] is not None else m) - m) * scale)
+        colours = ["#7f8c8d" if n == REAL else ("#c0392b" if n == "upm" else
+                   "#27ae60" if n == "feasible" else "#2c3e50") for n in names]
+        ax.bar(range(len(names)), means, yerr=[los, his], color=colours, capsize=3)
+        ax.set_xticks(range(len(names)))
+        ax.set_xticklabels(["real" if n == REAL else n for n in names], rotation=45,
+                           ha="right")
+        ax.set_title(label(metric))
+        ax.grid(axis="y", alpha=0.3)
+    fig.suptitle(f"Free-root test: the balance controller performs each window "
+                 f"(L = {frames}; {CONTEXT_S:g} s context each side; grey: real windows)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

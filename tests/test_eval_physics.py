@@ -1,0 +1,143 @@
+"""The study's free-root test (``upm eval --physics``) and its executors, on a small real
+study: every method's physics figures exist and are finite where the character was up;
+the local pool and Ray give the same records; a failing run is reported with its pair and
+method, keeps what finished, and a rerun completes only what is missing; the long-form
+table refuses a misspelt metric."""
+
+import math
+
+import pytest
+
+from eval.physics import PHYSICS_METRICS, StudyIncomplete, run_physics
+from eval.records import Records
+from eval.study import STUDY_METHODS, StudyConfig, run_study
+
+PAIRS = 3
+
+
+@pytest.fixture(scope="module")
+def study(data_dir):
+    config = StudyConfig(data_dir=str(data_dir), pairs=PAIRS, windows=(20,), seed=3,
+                         methods=STUDY_METHODS)
+    return run_study(config, workers=2, show_progress=False)
+
+
+@pytest.fixture(scope="module")
+def local_run(study, tmp_path_factory):
+    out = tmp_path_factory.mktemp("physics-local")
+    return run_physics(study, PAIRS, out, executor="local", workers=2, show_progress=False)
+
+
+def test_every_method_and_the_real_windows_have_finite_physics_figures(local_run):
+    records = local_run.records
+    for method in [*STUDY_METHODS, "real"]:
+        kind = "real" if method == "real" else "pair"
+        assert records.ids(kind, 20, method) == list(range(PAIRS)), method
+        fell = records.values(kind, 20, method, "fell")
+        assert set(fell) <= {0.0, 1.0}
+        fall_time = records.values(kind, 20, method, "fall_after_window_start_s")
+        assert all(math.isnan(t) == (f == 0.0) for f, t in zip(fell, fall_time, strict=True))
+        for metric in PHYSICS_METRICS:
+            if metric in ("fell", "fall_after_window_start_s"):
+                continue
+            values = records.values(kind, 20, method, metric)
+            up = fell == 0.0
+            assert all(math.isfinite(v) for v in values[up]), (method, metric, values)
+    # The controller must hold the real windows of these clips at least once: the test
+    # can fail if the physics is broken.
+    assert records.values("real", 20, "real", "fell").min() == 0.0
+    errors = records.values("real", 20, "real", "joint_error_deg_rms")
+    assert 0.0 < min(e for e in errors if math.isfinite(e)) < 10.0
+    summary = local_run.statistics["summary"]["20"]["all"]
+    assert set(summary) == {*STUDY_METHODS, "real"}
+    assert set(local_run.statistics["paired"]["20"]) == set(STUDY_METHODS) - {"upm"}
+
+
+def test_ray_gives_the_same_records_as_the_local_pool(study, local_run, tmp_path):
+    pytest.importorskip("ray")
+    ray_run = run_physics(study, PAIRS, tmp_path, executor="ray", workers=2,
+                          show_progress=False)
+    assert ray_run.records.to_csv() == local_run.records.to_csv()
+    assert ray_run.statistics == local_run.statistics
+
+
+def _fake_figures(unit):
+    return {name: float(unit.index + len(unit.method)) for name in PHYSICS_METRICS} | {
+        "fell": 0.0, "fall_after_window_start_s": math.nan}
+
+
+def test_a_failed_run_is_named_kept_and_completed_by_a_rerun(study, tmp_path, monkeypatch):
+    import eval.physics as physics
+
+    calls = []
+
+    def failing(model, motion, start, stop):
+        unit = calls[-1]
+        if unit.kind == "pair" and unit.index == 1 and unit.method == "linear":
+            raise RuntimeError("the simulation diverged")
+        return _fake_figures(unit)
+
+    original_run_unit = physics.run_unit
+
+    def run_unit(unit):
+        calls.append(unit)
+        return original_run_unit(unit)
+
+    monkeypatch.setattr(physics, "simulate_unit", failing)
+    monkeypatch.setattr(physics, "run_unit", run_unit)
+    with pytest.raises(StudyIncomplete, match=r"1 of \d+ free-root runs failed.*pair 1, "
+                                              r"linear, L = 20.*diverged.*run the same"):
+        run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
+    total = len(calls)
+    lines = (tmp_path / "physics-partial.jsonl").read_text().splitlines()
+    assert len(lines) == 1 + total - 1  # the settings line and every finished run
+
+    calls.clear()
+    monkeypatch.setattr(physics, "simulate_unit",
+                        lambda model, motion, start, stop: _fake_figures(calls[-1]))
+    result = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
+    assert [(u.kind, u.index, u.method) for u in calls] == [("pair", 1, "linear")]
+    assert result.resumed == total - 1
+    assert len(result.records) == total * len(PHYSICS_METRICS)
+
+
+def test_the_long_form_table_refuses_a_misspelt_metric():
+    records = Records(PHYSICS_METRICS)
+    records.add("pair", 0, 20, "upm", {"fell": 1.0})
+    with pytest.raises(KeyError, match="joint_eror_deg_rms"):
+        records.add("pair", 0, 20, "upm", {"joint_eror_deg_rms": 1.0})
+    with pytest.raises(KeyError, match="fel"):
+        records.values("pair", 20, "upm", "fel")
+    assert records.to_csv().splitlines() == ["kind,id,window,method,metric,value",
+                                             "pair,0,20,upm,fell,1"]
+
+
+@pytest.mark.parametrize("methods, note", [(["linear", "slerp"], "No paired tables"),
+                                           (["upm", "som"], "No UPM - linear tables")])
+def test_every_methods_subset_writes_a_complete_output(data_dir, tmp_path, methods, note):
+    from upm.cli import main
+
+    out = tmp_path / "out"
+    assert main(["eval", "--data", str(data_dir), "--pairs", "2", "--windows", "10",
+                 "--methods", *methods, "--no-figures", "--out", str(out)]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert names == {"results.json", "summary.csv", "paired.csv", "summary.md",
+                     "timing.json", "table4.md"}
+    assert note in (out / "summary.md").read_text()
+
+
+def test_a_failing_output_leaves_no_half_written_folder(data_dir, tmp_path, monkeypatch,
+                                                        capsys):
+    import eval.outputs
+    from upm.cli import main
+
+    def broken(*args, **kwargs):
+        raise ValueError("the renderer broke")
+
+    monkeypatch.setattr(eval.outputs, "write_figures", broken)
+    out = tmp_path / "out"
+    with pytest.raises(ValueError, match="renderer"):
+        main(["eval", "--data", str(data_dir), "--pairs", "2", "--windows", "10",
+              "--methods", "upm", "linear", "--out", str(out)])
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
