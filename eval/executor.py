@@ -17,6 +17,7 @@ arguments, and callers order the outcomes by key.
 
 from __future__ import annotations
 
+import contextlib
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -111,24 +112,11 @@ class RayExecutor:
         self.initargs = initargs
 
     def run(self, fn: Callable, tasks: Iterable[tuple[str, tuple]]) -> Iterator[Outcome]:
-        import os
-        import sys
-
         ray = import_ray()
         tasks = list(tasks)
         started = not ray.is_initialized()
         if started:
-            # Workers import this project as the driver does (an editable install or the
-            # driver's PYTHONPATH), with one BLAS thread each.
-            paths = [p for p in sys.path if p and os.path.isdir(p)]
-            env = {"PYTHONPATH": os.pathsep.join(paths), "OMP_NUM_THREADS": "1",
-                   "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-            options = {"include_dashboard": False, "log_to_driver": False,
-                       "runtime_env": {"env_vars": env}}
-            if self.address:
-                ray.init(address=self.address, **options)
-            else:
-                ray.init(num_cpus=self.workers, **options)
+            init_ray(ray, self.workers, self.address)
         try:
             remote = ray.remote(max_retries=RAY_RETRIES, retry_exceptions=False)(_call)
             pending = {remote.remote(self.initializer, self.initargs, fn, args): key
@@ -146,6 +134,44 @@ class RayExecutor:
         finally:
             if started:
                 ray.shutdown()
+
+
+def init_ray(ray, workers: int, address: str | None) -> None:
+    """Connect to the cluster at ``address``, or start a local instance of ``workers`` CPUs.
+
+    Workers import this project as the driver does (an editable install or the driver's
+    PYTHONPATH) and run BLAS single-threaded.
+    """
+    import logging
+    import os
+    import sys
+
+    paths = [p for p in sys.path if p and os.path.isdir(p)]
+    env = {"PYTHONPATH": os.pathsep.join(paths), "OMP_NUM_THREADS": "1",
+           "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    options = {"include_dashboard": False, "log_to_driver": False,
+               "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
+    if address:
+        ray.init(address=address, **options)
+    else:
+        ray.init(num_cpus=workers, **options)
+
+
+@contextlib.contextmanager
+def executor_session(name: str, workers: int, address: str | None = None):
+    """Keep one Ray connection for several runs (``name == "ray"``); nothing otherwise."""
+    if name != "ray":
+        yield
+        return
+    ray = import_ray()
+    if ray.is_initialized():
+        yield
+        return
+    init_ray(ray, workers, address)
+    try:
+        yield
+    finally:
+        ray.shutdown()
 
 
 def import_ray():

@@ -141,3 +141,18 @@ def test_a_failing_output_leaves_no_half_written_folder(data_dir, tmp_path, monk
               "--methods", "upm", "linear", "--out", str(out)])
     assert not out.exists()
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--physics-pairs", "2"], "--physics-pairs goes with --physics"),
+    (["--physics", "--physics-pairs", "9"], "between 1 and --pairs (3)"),
+    (["--address", "ray://head:10001"], "--address goes with --executor ray"),
+])
+def test_bad_physics_arguments_are_one_line_errors(data_dir, tmp_path, capsys, args, message):
+    from upm.cli import main
+
+    assert main(["eval", "--data", str(data_dir), "--pairs", "3", "--out",
+                 str(tmp_path / "out"), *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists()

@@ -164,16 +164,20 @@ def run(args) -> int:
                          seed=args.seed, methods=methods)
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
           f"{','.join(map(str, windows))}, seed {args.seed}", file=sys.stderr)
-    result = run_study(config, workers=args.workers, executor=args.executor,
-                       address=args.address)
-    physics = None
-    if args.physics:
-        from eval.physics import run_physics
+    from eval.executor import executor_session
+    from eval.study import default_workers
 
-        print(f"upm eval: free-root test on {physics_pairs} pairs x {len(methods)} methods "
-              f"+ real windows ({args.executor})", file=sys.stderr)
-        physics = run_physics(result, physics_pairs, out, executor=args.executor,
-                              address=args.address, workers=args.workers)
+    with executor_session(args.executor, args.workers or default_workers(), args.address):
+        result = run_study(config, workers=args.workers, executor=args.executor,
+                           address=args.address)
+        physics = None
+        if args.physics:
+            from eval.physics import run_physics
+
+            print(f"upm eval: free-root test on {physics_pairs} pairs x {len(methods)} "
+                  f"methods + real windows ({args.executor})", file=sys.stderr)
+            physics = run_physics(result, physics_pairs, out, executor=args.executor,
+                                  address=args.address, workers=args.workers)
     report = write_outputs(result, out, figures=args.figures, physics=physics)
     if physics is not None:
         physics.checkpoint.remove()
