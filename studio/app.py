@@ -180,16 +180,16 @@ class Studio:
         return rows
 
     def show_frame(self, t: int) -> None:
-        """Pose the capsules at frame ``t``, tinted red where the frame is invalid."""
+        """Pose the capsules at frame ``t``; the bodies that break a check are red."""
         scene, ghost = self.scene, self.ghost
         if scene is None:
             return
-        color = VALID_RGB if scene.valid[t] else INVALID_RGB
+        bad = scene.offending[t]
         with self.server.atomic():
             for g, handle in enumerate(self._capsules):
                 handle.position = scene.geom_pos_m[t, g]
                 handle.wxyz = scene.geom_wxyz[t, g]
-                handle.color = color
+                handle.color = INVALID_RGB if bad[g] else VALID_RGB
             for g, handle in enumerate(self._ghosts):
                 handle.visible = ghost is not None
                 if ghost is not None:

@@ -34,7 +34,11 @@ class Scene:
     result : upm.transitions.Transition
     geom_pos_m : (T, G, 3) array, world positions of the G capsules per frame.
     geom_wxyz : (T, G, 4) array, their orientations as unit quaternions.
-    valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision).
+    valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision,
+        floor).
+    offending : (T, G) bool array, the capsules whose body breaks a check on that frame
+        (a DOF of its bone beyond its limit, a self-contact deeper than 1 mm, more than
+        1 cm below the floor): what the studio tints.
     seconds : float, wall time of the whole recomputation (transition + kinematics + checks).
     """
 
@@ -42,6 +46,7 @@ class Scene:
     geom_pos_m: np.ndarray
     geom_wxyz: np.ndarray
     valid: np.ndarray
+    offending: np.ndarray
     seconds: float
 
 
@@ -97,8 +102,49 @@ class Session:
         start = time.perf_counter()
         result = self.transition(method)
         pos, wxyz = capsule_poses(self.model, to_qpos(self.model, result.motion))
-        valid = check_motion(self.model, result.motion, [result.window]).valid
-        return Scene(result, pos, wxyz, np.asarray(valid, bool), time.perf_counter() - start)
+        validity = check_motion(self.model, result.motion, [result.window])
+        bodies = offending_bodies(self.model, validity)
+        offending = bodies[:, self.model.geom_bodyid[capsule_geoms(self.model)]]
+        return Scene(result, pos, wxyz, np.asarray(validity.valid, bool), offending,
+                     time.perf_counter() - start)
+
+
+def offending_bodies(model, validity) -> np.ndarray:
+    """Which bodies break a kinematic check on each frame.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    validity : controller.validity.Validity
+
+    Returns
+    -------
+    (T, nbody) bool array
+        A body is flagged when a DOF of its bone is beyond its limit, when it is in a
+        self-contact deeper than :data:`controller.contacts.SELF_COLLISION_DEPTH_M`, or
+        when it is more than :data:`controller.validity.FLOOR_TOLERANCE_M` below the
+        floor: the frame-level flags of :attr:`Validity.valid`, per body.
+    """
+    import mujoco
+
+    from controller.contacts import SELF_COLLISION_DEPTH_M
+    from controller.validity import FLOOR_TOLERANCE_M
+    from upm.skeleton import POSTURE_DOF_NAMES
+
+    n = validity.n_frames
+    out = np.zeros((n, model.nbody), dtype=bool)
+    dof_body = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY,
+                                           name.split(".")[0]) for name in POSTURE_DOF_NAMES])
+    frames, dofs = np.nonzero(validity.limit_excess_deg > 0)
+    known = dof_body[dofs] >= 0
+    out[frames[known], dof_body[dofs[known]]] = True
+    c = validity.contacts
+    self_deep = ~c.is_floor & (c.depth_m > SELF_COLLISION_DEPTH_M)
+    out[c.frame[self_deep], c.body1[self_deep]] = True
+    out[c.frame[self_deep], c.body2[self_deep]] = True
+    floor_deep = c.is_floor & (c.depth_m > FLOOR_TOLERANCE_M)
+    out[c.frame[floor_deep], c.body2[floor_deep]] = True
+    return out
 
 
 def capsule_geoms(model) -> np.ndarray:

@@ -31,6 +31,21 @@ def test_every_registered_method_is_offered():
     assert method_names() == list(METHODS)
 
 
+def test_only_the_offending_bodies_are_tinted(session, catalog):
+    """On 05_11 (a dance whose frames break limits) the tint marks some capsules, not the
+    whole figure; a frame is invalid exactly when at least one capsule is marked."""
+    from studio.session import Session
+
+    dance = Session(catalog, "05_11", "02_03")
+    dance.method = "linear"
+    scene = dance.recompute()
+    marked = scene.offending.sum(axis=1)
+    assert scene.offending.shape == scene.geom_pos_m.shape[:2]
+    np.testing.assert_array_equal(marked > 0, ~scene.valid)
+    assert (~scene.valid).any()
+    assert (marked[~scene.valid] < scene.offending.shape[1]).all()
+
+
 def test_alpha_reshapes_the_window_and_poses_follow(session):
     session.alpha = 0.1
     low = session.recompute()

@@ -2,8 +2,9 @@
 
 The subject's humanoid plays clip 1 -> window -> clip 2 in a loop. Change the clips, their
 frames, the method, alpha or the window length and the transition is recomputed at once;
-frames that fail the kinematic checks (joint limits, self-collision, floor) tint the whole
-body red and are marked red on the strip; a second method can be ghosted beside it.
+the bodies that fail a kinematic check on the current frame (a joint beyond its limit,
+self-collision, below the floor) are tinted red and such frames are marked red on the
+strip; a second method can be ghosted beside it.
 
 Example:
   upm studio --from 02_01 --to 02_03 --port 8080     # then open http://localhost:8080
