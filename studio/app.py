@@ -73,8 +73,8 @@ class Studio:
         self.strip = gui.add_image(np.zeros((12, 2, 3), np.uint8), label="valid frames")
         self.dof = gui.add_text("Fig. 13 DOF", "rhumerus.rz")
         self.curve = gui.add_image(np.full((8, 8, 3), 255, np.uint8), label="DOF vs linear")
-        self.amc_path = gui.add_text("export AMC to", "transition.amc")
-        export = gui.add_button("export AMC")
+        self.amc_path = gui.add_text("export to (.amc or .bvh)", "transition.amc")
+        export = gui.add_button("export AMC / BVH")
         export.on_click(lambda _: self.export())
         check = gui.add_button("physics check (upm simulate)")
         check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
@@ -158,7 +158,7 @@ class Studio:
             self.status.content += f"  \n**Fig. 13:** {error}"
 
     def export(self) -> str:
-        """Write the current transition as an AMC (BVH: once ``upm`` writes BVH)."""
+        """Write the current transition as AMC or BVH (by the extension)."""
         from studio.session import export_amc
 
         path = export_amc(self.scene.result, self.amc_path.value)

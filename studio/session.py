@@ -183,13 +183,11 @@ def capsule_poses(model, qpos) -> tuple[np.ndarray, np.ndarray]:
 
 
 def export_amc(result, path) -> str:
-    """Write the transition (clip 1 context, window, clip 2 context) as an AMC, atomically.
+    """Write the transition (clip 1 context, window, clip 2 context) as AMC or BVH (by the
+    extension), atomically."""
+    from upm.motion_io import write_motion
 
-    BVH export joins here once ``upm`` writes BVH (not yet: the studio offers AMC only).
-    """
-    from upm.amc import write_amc
-
-    write_amc(path, result.motion)
+    write_motion(path, result.motion)
     return str(path)
 
 

@@ -28,6 +28,7 @@ COMMANDS: dict[str, str] = {
     "bench": "upm.commands.bench",
     "transition": "upm.commands.transition",
     "sequence": "upm.commands.sequence",
+    "convert": "upm.commands.convert",
     "model": "upm.commands.model",
     "check": "upm.commands.check",
     "simulate": "upm.commands.simulate",

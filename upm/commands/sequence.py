@@ -1,4 +1,4 @@
-"""Join a sequence of clip pieces into one continuous motion and write it as an AMC.
+"""Join a sequence of clip pieces into one continuous motion and write it as an AMC or a BVH.
 
 Each piece is CLIP (the whole clip), CLIP@A:B (frames A to B-1, 0-based) or CLIP@F (one
 frame, a held pose); a transition of --frames new frames joins each consecutive pair.
@@ -13,7 +13,7 @@ Example:
 
 from __future__ import annotations
 
-HELP = "join clips (CLIP@A:B ...) with transitions into one AMC"
+HELP = "join clips (CLIP@A:B ...) with transitions into one AMC or BVH"
 
 
 def configure(parser) -> None:
@@ -26,7 +26,9 @@ def configure(parser) -> None:
     add_method_arguments(parser)
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate of the result (default: the first piece's)")
-    parser.add_argument("--out", required=True, metavar="OUT.amc", help="the AMC to write")
+    parser.add_argument("--out", required=True, metavar="OUT.amc|OUT.bvh",
+                        help="the motion to write: AMC, or BVH (centimetres, y up) by the "
+                             "extension")
     parser.add_argument("--json", metavar="FILE.json", default=None,
                         help="also write where each piece and window lies, and the timing")
 
@@ -34,15 +36,17 @@ def configure(parser) -> None:
 def run(args) -> int:
     import json
 
-    from upm.amc import write_amc
     from upm.commands.transition import sequence_from_args
     from upm.errors import UsageError
     from upm.fileio import atomic_write_text
+    from upm.motion_io import check_motion_path, write_motion
+
+    check_motion_path(args.out)
 
     if len(args.pieces) < 2:
         raise UsageError("a sequence needs at least two pieces (CLIP@A:B CLIP@A:B ...)")
     catalog, refs, sequence = sequence_from_args(args, args.pieces)
-    write_amc(args.out, sequence.motion)
+    write_motion(args.out, sequence.motion)
     motion = sequence.motion
     report = {
         "method": sequence.method, "frames": sequence.frames, "alpha": args.alpha,

@@ -56,9 +56,9 @@ def configure(parser) -> None:
     parser.add_argument("--controller", choices=["balance", "servo"], default="balance",
                         help="the free-root controller: the balance controller (default) "
                              "or the position servos alone")
-    parser.add_argument("--amc", metavar="S.amc", default=None,
-                        help="write the free-root simulated motion as AMC (needs free in "
-                             "--modes)")
+    parser.add_argument("--amc", metavar="S.amc|S.bvh", default=None,
+                        help="write the free-root simulated motion as AMC or BVH, by the "
+                             "extension (needs free in --modes)")
     parser.add_argument("--control", metavar="C.npz", default=None,
                         help="write the balance controller's applied torques per physics "
                              "step, with its start state (needs free and --controller "
@@ -100,8 +100,10 @@ def run(args) -> int:
     if args.control and args.controller != "balance":
         raise UsageError("--control records the balance controller: use --controller "
                          "balance")
-    if args.amc and not args.amc.lower().endswith(".amc"):
-        raise UsageError(f"--amc {args.amc}: use a name ending in .amc")
+    if args.amc:
+        from upm.motion_io import check_motion_path
+
+        check_motion_path(args.amc, "--amc")
     if args.control and not args.control.lower().endswith(".npz"):
         raise UsageError(f"--control {args.control}: use a name ending in .npz")
     render = args.render or args.modes[0]
@@ -171,10 +173,10 @@ def _write_simulated_amc(model, qpos, motion, path):
     import numpy as np
 
     from controller.qpos import from_qpos
-    from upm.amc import write_amc
+    from upm.motion_io import write_motion
 
     simulated = qpos[np.isfinite(qpos).all(axis=1)]
-    write_amc(path, from_qpos(model, simulated, motion.skeleton, motion.fps,
+    write_motion(path, from_qpos(model, simulated, motion.skeleton, motion.fps,
                               name=f"{motion.name} simulated"))
     return path
 

@@ -77,7 +77,9 @@ def configure(parser) -> None:
     parser.add_argument("--context", type=int, default=None, metavar="N",
                         help="frames of each clip kept in the AMC around the window "
                              "(default: one second)")
-    parser.add_argument("--out", required=True, metavar="OUT.amc", help="the AMC to write")
+    parser.add_argument("--out", required=True, metavar="OUT.amc|OUT.bvh",
+                        help="the motion to write: AMC, or BVH (centimetres, y up) by the "
+                             "extension")
     parser.add_argument("--json", metavar="FILE.json", default=None,
                         help="also write the window's postures, root and timing as JSON")
     parser.add_argument("--plot", metavar="FIG.png", default=None,
@@ -145,12 +147,14 @@ def window_report(result, fps: float) -> dict:
 def run(args) -> int:
     import json
 
-    from upm.amc import write_amc
     from upm.catalog import Catalog
     from upm.errors import UsageError
     from upm.fileio import atomic_write_text
+    from upm.motion_io import check_motion_path, write_motion
     from upm.transitions import transition
     from upm.transitions.load import key_source_for
+
+    check_motion_path(args.out)
 
     if args.context is not None and args.context < 2:
         raise UsageError(f"--context must be at least 2 frames, not {args.context}")
@@ -168,7 +172,7 @@ def run(args) -> int:
     key_source = key_source_for(args.method, args.map, catalog)
     result = transition(args.method, before, after, args.frames, args.alpha, key_source,
                         align_heading=args.align_heading)
-    write_amc(args.out, result.motion)
+    write_motion(args.out, result.motion)
     report = window_report(result, result.motion.fps)
     report.update({"from": f"{source_ref.name}@{a_frame}", "to": f"{target_ref.name}@{b_frame}",
                    "out": str(args.out), "out_frames": result.motion.n_frames,
