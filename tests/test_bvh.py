@@ -174,14 +174,52 @@ def test_convert_and_transition_write_bvh(data_dir, tmp_path, capsys):
     assert read_bvh(tmp_path / "t.bvh").skeleton.names[0] == "root"
     capsys.readouterr()
     for args, message in [
-        ([str(data_dir.parent / "bvh" / "05_01.bvh"), str(tmp_path / "x.amc"), "--skeleton",
-          str(data_dir / "05" / "05.asf")], "retargeting other skeletons is not supported"),
+        ([str(data_dir.parent / "bvh" / "05_11_daz.bvh"), str(tmp_path / "x.amc"),
+          "--skeleton", str(data_dir / "05" / "05.asf")],
+         "retargeting other skeletons is not supported"),
         (["02_01", str(tmp_path / "x.fbx")], "ending in .amc or .bvh"),
         ([str(tmp_path / "missing.bvh"), str(tmp_path / "x.amc")], "no such file"),
     ]:
-        if "05_01.bvh" in args[0] and not (data_dir.parent / "bvh").is_dir():
+        if "05_11_daz.bvh" in args[0] and not (data_dir.parent / "bvh").is_dir():
             continue
         assert main(["convert", "--data", str(data_dir), *args]) == 2
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "x.amc").exists()
+    if (data_dir.parent / "bvh").is_dir():
+        assert main(["convert", "--data", str(data_dir), str(data_dir.parent / "bvh" /
+                     "05_01.bvh"), str(amc), "--skeleton", str(data_dir / "05" / "05.asf")]) == 0
+        assert amc.read_text().count("\nlfemur ") == 598  # the T-pose frame dropped
+
+
+@pytest.mark.parametrize("take", ["05_01", "05_02", "05_06", "05_11", "05_16"])
+def test_cgspeed_takes_retarget_onto_subject_05_within_a_centimetre(catalog, bvh_dir, take):
+    """The cgspeed conversions (on subject 05's own bones, an added T-pose first frame)
+    put every 21-joint bone end where the AMC of the same take does (measured worst:
+    0.005 mm)."""
+    from upm.bvh.retarget import added_tpose, retarget_cmu
+    from upm.skeleton import JOINTS
+
+    amc = catalog.load(take)
+    bvh = read_bvh(bvh_dir / f"{take}.bvh")
+    assert added_tpose(bvh)
+    motion = retarget_cmu(bvh, amc.skeleton, fps=amc.fps)
+    assert motion.n_frames == amc.n_frames
+    bones = [amc.skeleton.bone_index(j) for j in JOINTS]
+    error_m = np.linalg.norm(forward_kinematics(motion)[:, bones]
+                             - forward_kinematics(amc)[:, bones], axis=-1)
+    assert error_m.max() < 0.01
+    # keeping the T-pose frame shifts the take by one frame: the check can fail
+    kept = retarget_cmu(bvh, amc.skeleton, drop_tpose=False)
+    shifted = np.linalg.norm(forward_kinematics(kept)[1:, bones]
+                             - forward_kinematics(amc)[:, bones], axis=-1)
+    assert shifted.max() < 0.01 and kept.n_frames == amc.n_frames + 1
+
+
+def test_other_skeletons_are_refused_naming_the_file(catalog, bvh_dir):
+    from upm.bvh.retarget import retarget_cmu
+
+    for name in ("05_11_daz.bvh", "mixamo_test_freebvh.bvh", "mocapbank_test.bvh"):
+        with pytest.raises(DataFileError, match="not a CMU 31-joint BVH") as info:
+            retarget_cmu(read_bvh(bvh_dir / name), catalog.skeleton("05"))
+        assert info.value.path.endswith(name)

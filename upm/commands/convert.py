@@ -6,9 +6,13 @@ IN is a clip of the data directory (02_01, 02_01@0:200), an .amc file with its
   - clip / AMC -> BVH: the motion on its ASF skeleton as BVH: one joint per ASF bone (its
     ASF name), the ASF rest pose, y up, centimetres, Z Y X rotation channels; the root
     adds X Y Z positions. Blender imports it upright with its default settings.
-  - BVH -> AMC: a BVH written on that ASF (by upm, or a tool that kept its hierarchy),
-    with --skeleton. Other skeletons (CMU conversions by other tools, DAZ, Mixamo) need a
-    retarget onto the ASF, which upm does not do yet: they are refused with a message.
+  - BVH -> AMC (or BVH on the ASF), with --skeleton: a BVH written by upm on that ASF,
+    or a take in the CMU 31-joint naming (Hips, LHipJoint, LeftUpLeg, ...: the cgspeed
+    conversions), whose added T-pose first frame is detected and dropped (--keep-first
+    keeps it); when the file is named after a clip of the data directory, its frame rate
+    comes from clips.csv (subject 141's conversions say 120 fps for 60 fps takes).
+    Other skeletons (DAZ-style, Mixamo) need a world-direction retarget that upm does not
+    do yet: they are refused with a message.
   - BVH -> BVH: re-written as read (any hierarchy; --fps changes the frame time).
   - AMC -> AMC: re-written (e.g. a clip range as its own file).
 
@@ -36,6 +40,9 @@ def configure(parser) -> None:
                              "(for BVH -> AMC)")
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate of an .amc input (default 120) or of the output")
+    parser.add_argument("--keep-first", action="store_true",
+                        help="keep a CMU BVH's first frame even when it looks like an "
+                             "added T-pose")
 
 
 def run(args) -> int:
@@ -67,10 +74,26 @@ def run(args) -> int:
             print(f"wrote {args.out}: {bvh.n_frames} frames, {bvh.skeleton.n_joints} joints")
             return 0
         if not args.skeleton:
-            raise UsageError(f"{source} -> AMC needs the ASF it was written on: --skeleton")
+            raise UsageError(f"{source} -> AMC needs the ASF to put it on: --skeleton")
         from upm.asf import read_asf
 
-        motion = motion_from_bvh(bvh, read_asf(args.skeleton), name=source.stem)
+        skeleton = read_asf(args.skeleton)
+        if tuple(bvh.skeleton.names) == tuple(skeleton.bone_names):
+            motion = motion_from_bvh(bvh, skeleton, name=source.stem)
+        else:
+            import sys
+
+            from upm.bvh.retarget import CMU_31, retarget_cmu
+
+            if not set(CMU_31) <= set(bvh.skeleton.names):
+                motion_from_bvh(bvh, skeleton)  # the one-line refusal naming the file
+            fps = args.fps or _catalog_fps(args.data, source.stem)
+            if fps and abs(fps - bvh.fps) > 1e-3 * fps:
+                print(f"upm convert: {source.name}: {fps:g} fps from clips.csv (the file "
+                      f"says {bvh.fps:g})", file=sys.stderr)
+            motion = retarget_cmu(bvh, skeleton, fps=fps,
+                                  drop_tpose=False if args.keep_first else None,
+                                  name=source.stem)
     elif suffix == ".amc":
         if not args.skeleton:
             raise UsageError(f"{source}: an AMC file needs its skeleton: --skeleton ASF")
@@ -96,3 +119,15 @@ def run(args) -> int:
     print(f"wrote {args.out}: {motion.n_frames} frames at {motion.fps:g} fps "
           f"(ASF {Path(motion.skeleton.source).name})")
     return 0
+
+
+def _catalog_fps(data, stem: str) -> float | None:
+    """The frame rate clips.csv gives a clip named ``stem`` (None if there is none)."""
+    from upm.catalog import Catalog
+    from upm.errors import UpmError
+
+    try:
+        catalog = Catalog(data)
+        return float(catalog.info(stem).fps)
+    except (UpmError, KeyError, OSError):
+        return None
