@@ -2,8 +2,8 @@
 
 The BVH has one joint per ASF bone, named as in the ASF, placed where the bone turns (its
 parent's distal end); a leaf bone's distal end is its ``End Site``. The rest pose is the
-ASF's (y up, the bones along their ASF directions: CMU skeletons stand upright in
-Blender's BVH import with its default "Y up"), lengths in **centimetres** (Blender,
+ASF's (y up, the bones along their ASF directions; y up is what Blender's BVH import
+assumes by default), lengths in **centimetres** (Blender,
 Maya and MotionBuilder read BVH in centimetres by convention). Every joint has the
 channels ``Zrotation Yrotation Xrotation`` (``R = Rz Ry Rx``): its rotation relative to
 its parent, ``C M C^T`` for the 21 posture joints (the ASF axis frame ``C``, the AMC

@@ -5,7 +5,7 @@ IN is a clip of the data directory (02_01, 02_01@0:200), an .amc file with its
 
   - clip / AMC -> BVH: the motion on its ASF skeleton as BVH: one joint per ASF bone (its
     ASF name), the ASF rest pose, y up, centimetres, Z Y X rotation channels; the root
-    adds X Y Z positions. Blender imports it upright with its default settings.
+    adds X Y Z positions (y up, as Blender's BVH import assumes by default).
   - BVH -> AMC (or BVH on the ASF), with --skeleton: a BVH written by upm on that ASF,
     or a take in the CMU 31-joint naming (Hips, LHipJoint, LeftUpLeg, ...: the cgspeed
     conversions), whose added T-pose first frame is detected and dropped (--keep-first
