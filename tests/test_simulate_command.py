@@ -86,8 +86,8 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys, monkeypatch):
           "--amc", "s.amc"], "need the free-root run"),
         (["--sequence", "02_01@0:50", "--method", "linear", "--controller", "servo",
           "--control", "c.npz"], "--control records the balance controller"),
-        (["--sequence", "02_01@0:50", "--method", "linear", "--amc", "s.bvh"],
-         "--amc s.bvh"),
+        (["--sequence", "02_01@0:50", "--method", "linear", "--amc", "s.fbx"],
+         "--amc s.fbx: use a name ending in .amc or .bvh"),
     ]:
         assert main(["simulate", *base, *args]) == 2, args
         err = capsys.readouterr().err
