@@ -14,6 +14,8 @@ import random
 import re
 import zipfile
 
+import numpy as np
+
 #: Finite numbers no real file holds, and numbers that are not plain ASCII decimals.
 ABSURD_NUMBERS = ("1e300", "-1e308", "1e308", "5e-324", "-0", "0", "1e-300", "1e6", "1e7",
                   "123456789012345678901234567890", "9" * 5000, "\u00b2", "\u00b3", "\u00b9",
@@ -173,11 +175,13 @@ def mutate_npz(data: bytes, rng: random.Random) -> bytes:
     elif choice == 4:  # another array: 0-d, wrong rank, dtype, or an object array
         value = rng.choice((np.array("body"), np.zeros(3), np.zeros((2, 2, 2)),
                             np.array([1, 2], dtype=np.int8), np.array(["a", "b"]),
-                            np.array(1.5), np.array([{"a": 1}], dtype=object),
-                            np.full((3, 15), 1e308), np.zeros((0, 15))))
-        buffer = io.BytesIO()
-        np.lib.format.write_array(buffer, value, allow_pickle=True)
-        members[name] = buffer.getvalue()
+                            np.array(1.5), None, np.full((3, 15), 1e308), np.zeros((0, 15))))
+        if value is None:  # an object array: header only, its payload is never unpickled
+            members[name] = object_npy(b"\x80\x04junk")
+        else:
+            buffer = io.BytesIO()
+            np.lib.format.write_array(buffer, value)
+            members[name] = buffer.getvalue()
     elif choice == 5:  # metadata edits
         meta = rng.choice(('{"params": {}, "stats": {"body": null}, "provenance": {}}',
                            '{"params": [], "stats": [], "provenance": []}',
@@ -193,6 +197,15 @@ def mutate_npz(data: bytes, rng: random.Random) -> bytes:
         for key, value in members.items():
             archive.writestr(key, value)
     return out.getvalue()
+
+
+def object_npy(payload: bytes, length: int = 1) -> bytes:
+    """An ``.npy`` member declaring an object array (``|O``) followed by ``payload``: what a
+    pickle-bearing map looks like, written without pickling anything."""
+    buffer = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        buffer, {"descr": "|O", "fortran_order": False, "shape": (length,)})
+    return buffer.getvalue() + payload
 
 
 def zip_bomb(data: bytes, megabytes: int = 64) -> bytes:

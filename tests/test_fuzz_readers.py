@@ -227,18 +227,16 @@ def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
     import io
     import zipfile
 
+    from tests.fuzz_mutations import object_npy
     from upm.posture_map import load_map
 
-    class Boom:
-        def __reduce__(self):
-            return (exec, ("raise SystemExit('unpickled')",))
-
-    buffer = io.BytesIO()
-    np.lib.format.write_array(buffer, np.array([Boom()], dtype=object), allow_pickle=True)
+    # A protocol-0 pickle stream, written by hand, that exits the process if unpickled.
+    boom = b"cbuiltins\nexec\n(Vraise SystemExit('unpickled')\ntR."
+    member = object_npy(boom)
     out = io.BytesIO()
     with zipfile.ZipFile(io.BytesIO(map_bytes)) as src, zipfile.ZipFile(out, "w") as dst:
         for info in src.infolist():
-            data = buffer.getvalue() if info.filename == "neurons_body.npy" else src.read(info)
+            data = member if info.filename == "neurons_body.npy" else src.read(info)
             dst.writestr(info.filename, data)
     path = tmp_path / "pickled.npz"
     path.write_bytes(out.getvalue())
