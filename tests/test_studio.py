@@ -98,6 +98,9 @@ def test_page_in_headless_chromium_follows_alpha(session, tmp_path):
 
     studio = Studio(session, port=_free_port())
     try:
+        # Paused: a playing scene streams a pose per frame to the page, and headless
+        # Chromium's virtual-time budget then waited minutes for the network to settle.
+        studio.playing.value = False
         url = f"http://127.0.0.1:{studio.port}/"
         first = studio.set(alpha=0.1, frame=studio.scene.result.window.start + 10)
         first_pos_m = first.geom_pos_m[int(studio.frame.value)]
