@@ -27,7 +27,6 @@ from upm.kinematics import global_transforms
 from upm.rotations import (
     _alternate_euler,
     continuous_euler_deg,
-    euler_to_matrix,
     matrix_to_euler_deg,
 )
 from upm.skeleton import JOINTS
@@ -144,7 +143,3 @@ def _joint_angles(matrix: np.ndarray, declared: np.ndarray) -> np.ndarray:
         angles = np.unwrap(angles, period=360.0, axis=0)
     return angles
 
-
-def root_matrix(root) -> np.ndarray:
-    """Helper for tests: the root rotation of a ``(T, 6)`` root in XYZ order."""
-    return euler_to_matrix(np.asarray(root)[:, 3:6], "XYZ")
