@@ -48,7 +48,7 @@ def _angle_deg(a, b):
 
 def test_daz_05_11_onto_subject_05_points_the_bones_as_the_amc(catalog, bvh_dir):
     """The DAZ-style figure is another body (its forearms bend 17 degrees forward at rest,
-    its collars point down): measured median 7.6 degrees, 95th percentile 52, worst 71
+    its collars point down): measured median 7.7 degrees, 95th percentile 52, worst 71
     (hands and toes the largest; thighs and shins 3-6 degrees median)."""
     amc = catalog.load("05_11")
     bvh = read_bvh(bvh_dir / "05_11_daz.bvh")
@@ -97,9 +97,9 @@ def test_the_added_rest_frame_is_detected_only_where_there_is_one(bvh_dir, gener
 def test_every_figure_lands_its_bones_where_the_bvh_points_them(catalog, bvh_dir, generic,
                                                                 name, subject):
     """Each mapped ASF bone points along its BVH segment (what the declared DOFs allow:
-    measured median 0.1-0.3 degrees, 95th percentile 0.8-3.7; the shins and forearms,
-    one-DOF hinges, only where the thigh's and upper arm's twist is right), and the
-    lowest point stays near the floor."""
+    measured median 0.01-0.06 degrees, 95th percentile 0.3-4.1, worst 17.5 on a Mixamo
+    foot; the shins and forearms, one-DOF hinges, only where the thigh's and upper arm's
+    twist is right: at most 0.2), and the lowest point stays near the floor."""
     skeleton = catalog.skeleton(subject) if subject else generic
     bvh = read_bvh(bvh_dir / name)
     joint_map = find_builtin_map(bvh)
@@ -121,7 +121,7 @@ def test_every_figure_lands_its_bones_where_the_bvh_points_them(catalog, bvh_dir
     every = np.concatenate(list(errors.values()))
     assert np.median(every) < 1.0 and np.percentile(every, 95) < 6.0
     hinges = np.concatenate([errors[b] for b in ("ltibia", "rtibia", "lradius", "rradius")])
-    assert np.median(hinges) < 2.0
+    assert np.median(hinges) < 0.5 and hinges.max() < 2.0
     _, ends_m = global_transforms(skeleton, motion.posture_deg, motion.root)
     lowest = ends_m[..., 1].min(axis=1)
     assert -0.08 < np.median(lowest) < 0.12

@@ -16,13 +16,15 @@ segment of each posture bone. Per frame, top-down over the ASF tree:
 3. Its declared-DOF Euler angles (the AMC's ``Rz Ry Rx`` in the bone's axis frame, with
    the parent's already solved rotation) minimise, by damped Gauss-Newton from the
    closed-form 3-DOF solution projected on the declared DOFs:
-   ``|R u - d|^2`` (the direction, weight 1) + ``0.2^2 |R v - R* v|^2`` for two vectors
+   ``|R u - d|^2`` (the direction, weight 1) + ``0.1^2 |R v - R* v|^2`` for two vectors
    ``v`` across the bone (the twist, weak) + for each child that is a one-DOF hinge
-   (knee, elbow, toes), ``((R a) . d_child - a . u_child)^2`` (weight 1): the hinge axis
-   ``a`` must keep the child's direction reachable. So the femur's and humerus's twist
-   comes from the knee's and elbow's bend plane whenever the limb is bent, and from the
-   BVH segment's own rotation when it is straight; with fewer than 3 DOFs the fit is the
-   least-squares compromise of the same terms.
+   (knee, elbow, toes), ``3^2 ((R a) . d_child - a . u_child)^2``: the hinge axis ``a``
+   must keep the child's direction reachable. So the femur's and humerus's twist comes
+   from the knee's and elbow's bend plane whenever the limb is bent, and from the BVH
+   segment's own rotation when it is straight; with fewer than 3 DOFs the fit is the
+   least-squares compromise of the same terms. Without the hinge term the shins and
+   forearms miss their BVH directions by up to 27 degrees (95th percentile 15, Mixamo);
+   with it by at most 0.2 (the weights were chosen on that residual, not on any AMC).
 
 Bones without a counterpart keep their rest angles (0). Bone lengths are the ASF's.
 """
@@ -38,9 +40,9 @@ from upm.rotations import continuous_euler_deg, euler_to_matrix, matrix_to_euler
 from upm.skeleton import JOINTS
 
 #: Weight of the twist term against the direction term (see the module docstring).
-TWIST_WEIGHT = 0.2
+TWIST_WEIGHT = 0.1
 #: Weight of a one-DOF child's reachability term.
-HINGE_WEIGHT = 1.0
+HINGE_WEIGHT = 3.0
 #: A first frame is an added rest pose when every mapped joint's rotation channels are
 #: within this of 0 ...
 REST_FRAME_MAX_DEG = 5.0
