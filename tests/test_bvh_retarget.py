@@ -228,3 +228,43 @@ def test_clips_lists_the_bvh_files(data_dir, bvh_dir, capsys):
         "141_01.bvh", "141_04.bvh"]
     assert rows["mocapbank_test.bvh"]["joints"] == 19 and not rows["mocapbank_test.bvh"][
         "clip"]
+
+
+def test_mutated_joint_maps_are_read_or_refused_naming_them(catalog, bvh_dir, tmp_path):
+    import random
+
+    from tests.fuzz_mutations import mutate
+    from upm.bvh.joint_maps import builtin_maps
+
+    bvh = read_bvh(bvh_dir / "mocapbank_test.bvh")
+    bvh = replace(bvh, values=bvh.values[:10])
+    body = builtin_maps()["body19"]
+    source = json.dumps({"root": body.root, "bones": {b: list(e) for b, e in
+                                                      body.bones.items()}}, indent=1)
+    rng = random.Random(14)
+    outcomes = {"retargeted": 0, "refused": 0}
+    for case in range(150):
+        path = tmp_path / f"case{case}.json"
+        path.write_bytes(mutate(source.encode(), rng))
+        try:
+            motion = retarget_world(bvh, catalog.skeleton("05"), read_joint_map(path))
+        except DataFileError as exc:
+            assert "\n" not in str(exc)
+            assert exc.path in (str(path), bvh.source)
+            outcomes["refused"] += 1
+            continue
+        assert np.isfinite(motion.posture_deg).all() and np.isfinite(motion.root).all()
+        outcomes["retargeted"] += 1
+    assert outcomes["refused"] > 50 and outcomes["retargeted"] > 5, outcomes
+
+
+def test_a_bvh_that_does_not_read_is_listed_with_its_error(tmp_path):
+    from upm.bvh.listing import bvh_row
+
+    (tmp_path / "data").mkdir()
+    bad = tmp_path / "data" / "05_11_broken.bvh"
+    bad.write_text("HIERARCHY\nROOT hips\n{\n\tOFFSET 0 0\n}\n")
+    row = bvh_row(bad, ["05_11"], tmp_path / "data")
+    assert row["clip"] == "05_11" and row["frames"] == 0
+    assert row["problem"].startswith(str(bad)) and "OFFSET" in row["problem"]
+    assert row["file"] == "data/05_11_broken.bvh"
