@@ -210,6 +210,8 @@ def _solve_joint(parent, c, u, target, declared, hinges) -> np.ndarray:
     """Declared-DOF angles of one joint, ``(T, 3)`` degrees (undeclared 0)."""
     from upm.bvh.asf_bvh import _joint_angles
 
+    if not declared.any():
+        return np.zeros((parent.shape[0], 3))
     direction, rotation = target
     local = c.T @ np.swapaxes(parent, -1, -2) @ rotation @ c
     angles = _joint_angles(local, declared)
