@@ -148,7 +148,7 @@ class Records:
         upm.errors.DataFileError
             Naming ``path`` and the line at fault: a wrong header, a row of the wrong
             length, an unknown kind or metric, an id or window that is not an integer, a
-            value that is not a number.
+            value that is not a number, a row repeated.
         """
         from upm.errors import DataFileError
 
@@ -162,6 +162,7 @@ class Records:
             if len(row) != len(COLUMNS):
                 raise DataFileError(path, f"{len(row)} cells, not {len(COLUMNS)}", line)
             kind, index, window, method, metric, value = row
+            before = len(records)
             try:
                 number = math.nan if value == "" else float(value)
                 records.add(kind, int(index), int(window), method, {metric: number})
@@ -171,4 +172,7 @@ class Records:
                                     line) from None
             except KeyError as error:
                 raise DataFileError(path, error.args[0], line) from None
+            if len(records) == before:
+                raise DataFileError(path, f"a second row for {kind} {index}, window {window}, "
+                                          f"{method}, {metric}", line)
         return records

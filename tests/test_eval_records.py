@@ -63,6 +63,7 @@ def test_the_table_round_trips_through_its_csv_with_int_windows():
     ("pair,0,20,upm,valid_pct,lots", "a number"),
     ("pair,0,20,upm,valid_pct", "5 cells, not 6"),
     ("dream,0,20,upm,valid_pct,1.0", "'dream'"),
+    ("pair,0,20,upm,valid_pct,4.0", "a second row for pair 0, window 20, upm, valid_pct"),
 ])
 def test_reading_a_bad_csv_names_the_file_and_line(line, message):
     text = ",".join(COLUMNS) + "\npair,0,20,upm,valid_pct,3.0\n" + line + "\n"
