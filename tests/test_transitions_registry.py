@@ -72,11 +72,12 @@ def test_registered_method_runs_in_the_study(registered, data_dir):
     config = StudyConfig(data_dir=str(data_dir), pairs=1, windows=(10,), seed=3,
                          methods=("linear", NAME))
     result = run_study(config, workers=1, show_progress=False)
-    scores = result.pairs[0]["scores"][10]
-    assert set(scores) == {"linear", NAME}
+    scores = result.records
+    assert scores.ids("pair", 10, NAME) == scores.ids("pair", 10, "linear") == [0]
     # The same blend as linear, so the same scores: the study ran the registered method.
-    assert scores[NAME]["valid_pct"] == scores["linear"]["valid_pct"]
-    assert np.isfinite(scores[NAME]["jerk_rms_deg_s3"])
+    assert scores.values("pair", 10, NAME, "valid_pct") == scores.values(
+        "pair", 10, "linear", "valid_pct")
+    assert np.isfinite(scores.values("pair", 10, NAME, "jerk_rms_deg_s3")).all()
 
 
 def test_names_are_unique_and_builders_required():
