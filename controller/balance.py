@@ -106,6 +106,8 @@ MAX_BACKTRACK = 3
 SEARCH_BUDGET = 6.0
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
+#: Put every standing frame of the reference on the floor (:mod:`controller.grounding`).
+GROUND = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
@@ -263,6 +265,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.dropouts import fill_dropouts
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
+    from controller.grounding import ground_reference
     from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
@@ -299,6 +302,11 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
     ref[:, 2] += height_shift
     smooth[:, 2] += height_shift
+    if GROUND:
+        # and every standing frame on the floor (controller.grounding)
+        down = FootPlacement(sim, ref, fps).ref_down
+        smooth, ground_shift = ground_reference(sim, smooth, fps, down)
+        ref[:, 2] += ground_shift
     ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
     start = smooth[0].copy()
     start_qvel = ref_qvel[0].copy()
