@@ -84,10 +84,12 @@ MAX_ACCELERATION = 300.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
 #: The controller's modes, tried in this order where the default leads to trouble: the
-#: foot-placement gain and which floor contacts of the foot the reference has in the air
-#: are not planned as support ("none"; "toes": a swing toe that scrapes the floor is not
-#: pinned to it; "foot": no contact of that foot).
-MODES = ((0.3, "none"), (0.3, "toes"), (0.6, "none"), (0.6, "toes"), (0.3, "foot"))
+#: foot-placement gain, which floor contacts of the foot the reference has in the air are
+#: not planned as support ("none"; "toes": a swing toe that scrapes the floor is not
+#: pinned to it; "foot": no contact of that foot), and the swing ankle's clearance above
+#: the reference's, metres (:mod:`controller.placement`). The first is the default.
+MODES = ((0.3, "none", 0.0), (0.3, "none", 0.04), (0.6, "none", 0.02), (0.3, "toes", 0.04),
+         (0.6, "toes", 0.04), (0.3, "foot", 0.04))
 #: Foot-placement gains chosen among by short rollouts for the default mode ...
 SELECT_GAINS = (0.3, 0.6)
 #: ... every this many seconds ...
@@ -101,9 +103,11 @@ SEGMENT_S = 0.25
 #: many segments back ...
 TROUBLE_DROP_M = 0.12
 TROUBLE_UP = 0.8
-MAX_BACKTRACK = 3
+MAX_BACKTRACK = 6
+#: ... and the segments after a changed one keep its mode for this long ...
+STICKY_S = 2.0
 #: ... within this many times the reference's physics steps in all.
-SEARCH_BUDGET = 6.0
+SEARCH_BUDGET = 10.0
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
 #: Put every standing frame of the reference on the floor (:mod:`controller.grounding`).
@@ -350,7 +354,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         t = 1
         while t < n_frames:
             search.enter(data, t)
-            gain, exclude = MODES[search.mode(t)]
+            gain, exclude, clearance = MODES[search.mode(t)]
             if selector is not None and search.mode(t) == 0:
                 # the default mode's gain, chosen by lookahead (once per start frame)
                 first = (t - 1) - (t - 1) % selector.every_frames
@@ -358,7 +362,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     selected[first] = selector.choose(data, first) if first == t - 1 else gain
                 gain = selected[first]
             for k in range((t - 1) * substeps, t * substeps):
-                applied, tau = control.step(data, k, gain, exclude)
+                applied, tau = control.step(data, k, gain, exclude, clearance)
                 ctrl[k] = applied
                 steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
@@ -452,7 +456,8 @@ class _Control:
         swing = self.placement.swing_bodies(frame)
         return swing & self.toes if how == "toes" else swing
 
-    def step(self, data, k: int, gain: float, exclude: str = "none"):
+    def step(self, data, k: int, gain: float, exclude: str = "none",
+             clearance_m: float | None = None):
         """Control and take physics step ``k``; returns the applied and the planned
         torques, (nu,) each."""
         import mujoco
@@ -474,7 +479,7 @@ class _Control:
             qdd_ref[self.hinge_v[clipped]] = 0.0
         frame = min(int(round(s)), n_frames - 1)
         if PLACEMENT:
-            self.placement.adjust(data, frame, q_ref, gain)
+            self.placement.adjust(data, frame, q_ref, gain, clearance_m)
         mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
         qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
         np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
@@ -514,7 +519,7 @@ class _GainSelector:
             cost = 0.0
             for t in range(frame + 1, last + 1):
                 for k in range((t - 1) * control.substeps, t * control.substeps):
-                    control.step(scratch, k, gain, "none")
+                    control.step(scratch, k, gain, "none", MODES[0][2])
                 if not np.all(np.isfinite(scratch.qpos)):
                     cost = math.inf
                     break
@@ -545,6 +550,7 @@ class _Search:
                  pelvis_body: int):
         self.sim, self.n_frames = sim, n_frames
         self.every = max(1, int(round(SEGMENT_S * fps)))
+        self.sticky = int(round(STICKY_S / SEGMENT_S))
         self.ref_pelvis, self.pelvis_body = ref_pelvis, pelvis_body
         self.budget_steps = SEARCH_BUDGET * (n_frames - 1) * substeps
         self.choice: dict[int, int] = {}
@@ -567,14 +573,22 @@ class _Search:
                 mujoco.mj_copyData(copy_, self.sim, data)
                 self.saved[i] = copy_
 
+    def _mode_of(self, i: int) -> int:
+        """Segment ``i``'s mode: its own choice, else that of the latest segment before
+        it with one, within :data:`STICKY_S`, else the default."""
+        for j in range(i, max(-1, i - self.sticky - 1), -1):
+            if j in self.choice:
+                return self.choice[j]
+        return 0
+
     def mode(self, t: int) -> int:
         """The index in :data:`MODES` of frame ``t``'s segment."""
-        return self.choice.get(self._segment(t), 0)
+        return self._mode_of(self._segment(t))
 
     def modes(self) -> np.ndarray:
         """The mode of every segment, int array (segments,)."""
         n = self._segment(self.n_frames - 1) + 1
-        return np.array([self.choice.get(i, 0) for i in range(n)], dtype=int)
+        return np.array([self._mode_of(i) for i in range(n)], dtype=int)
 
     def in_trouble(self, data, t: int) -> bool:
         if t <= self.quiet_until:
@@ -593,13 +607,13 @@ class _Search:
         i = self._segment(t)
         back = i
         while back >= 0 and i - back <= MAX_BACKTRACK:
-            if self.choice.get(back, 0) + 1 < len(MODES):
+            if self._mode_of(back) + 1 < len(MODES):
                 break
             back -= 1
         if back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
             self.quiet_until = t + self.every
             return None
-        self.choice[back] = self.choice.get(back, 0) + 1
+        self.choice[back] = self._mode_of(back) + 1
         for j in [j for j in self.choice if j > back]:
             del self.choice[j]
         for j in [j for j in self.saved if j > back]:

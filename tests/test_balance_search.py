@@ -1,7 +1,7 @@
 """The balance controller's pieces that need no long simulation: marker dropouts filled
-on the real clip 16_15 (and nothing touched on a clean clip), and the backtracking
-search's bookkeeping (which segment is run again in which mode, within its reach and
-budget)."""
+on the real clip 16_15 (and nothing touched on a clean clip), the reference put on the
+floor, and the backtracking search's bookkeeping (which segment is run again in which
+mode, within its reach and budget)."""
 
 import mujoco
 import numpy as np
@@ -71,9 +71,12 @@ def test_search_retries_then_backtracks(search):
         assert s.mode(t) == mode
         assert data.time == 2 * every + 1
         _run_to(s, data, t)
-    # no modes left there: the segment before it, and segment 2 starts over
+    # no modes left there: the segment before it; segment 2 starts over in its mode,
+    # and the segments after keep it for STICKY_S, then go back to the default
     assert s.retry(data, t, steps=0) == every + 1
-    assert s.mode(every + 1) == 1 and s.mode(t) == 0
+    assert s.mode(every + 1) == 1 and s.mode(t) == 1
+    last_sticky = 1 + s.sticky
+    assert s.modes()[:last_sticky + 2].tolist() == [0] + [1] * s.sticky + [1, 0]
     assert s.retries == modes
 
 
@@ -84,3 +87,26 @@ def test_search_gives_up_out_of_reach_or_budget(search):
     assert s.retry(data, t, steps=int(s.budget_steps)) is None
     assert not s.in_trouble(data, t + 1)  # quiet from then on
     assert s.modes().tolist() == [0] * len(s.modes())
+
+
+def test_02_01_grounded(model02, walk):
+    """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
+    it; grounded, they touch it (within the low-pass's smoothing)."""
+    from controller.balance import floor_clearance
+    from controller.grounding import GROUND_DEPTH_M, ground_reference
+    from controller.placement import FootPlacement
+
+    qpos = to_qpos(model02, walk)
+    data = mujoco.MjData(model02)
+    qpos[:, 2] -= floor_clearance(model02, data, qpos[0])
+    down = FootPlacement(model02, qpos, walk.fps).ref_down
+    standing = np.flatnonzero(down.any(axis=1))[::4]
+    before = np.array([floor_clearance(model02, data, qpos[t]) for t in standing])
+    grounded, shift = ground_reference(model02, qpos, walk.fps, down)
+    after = np.array([floor_clearance(model02, data, grounded[t]) for t in standing])
+    assert before.max() > 0.04
+    assert np.median(np.abs(after + GROUND_DEPTH_M)) < 0.005
+    assert np.abs(after).max() < 0.02
+    # only the root's height moves, and smoothly (no step above 1 mm per frame)
+    np.testing.assert_array_equal(np.delete(grounded, 2, axis=1), np.delete(qpos, 2, axis=1))
+    assert np.abs(np.diff(shift)).max() < 0.001
