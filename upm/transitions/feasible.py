@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 from collections.abc import Callable
 
 import numpy as np
@@ -177,7 +178,7 @@ class FeasibleKeys:
         return self._excess[key]
 
     def _inside(self, class_name: str, limits_deg, widen_deg) -> np.ndarray:
-        """Indices of the class's neurons inside the allowed range."""
+        """Which of the class's neurons lie inside the allowed range, bool (K_c,)."""
         key = (np.ascontiguousarray(limits_deg).tobytes(), class_name)
         if key not in self._outside:
             excess = self.neuron_excess(limits_deg)[class_name]
@@ -188,7 +189,7 @@ class FeasibleKeys:
         allowed = np.all(excess <= widen + 1e-9, axis=1)
         inside = np.ones(count, dtype=bool)
         inside[outside[~allowed]] = False
-        return np.flatnonzero(inside)
+        return inside
 
     def candidates(self, point_deg, limits_deg, widen_deg, count: int = KEY_TRIES):
         """Whole-body key candidates inside the allowed range, nearest the point first.
@@ -215,16 +216,17 @@ class FeasibleKeys:
             s = CLASS_SLICES[c]
             neurons = self.posture_map.neurons[c]
             inside = self._inside(c, limits_deg, widen_deg)
-            if not inside.size:
+            n_inside = np.count_nonzero(inside)
+            if not n_inside:
                 distances.append(np.zeros(1))
                 values.append(clamp_into_range(point[s], limits_deg[s], widen_deg[s])[None])
                 continue
-            d = diff_of_wrapped(neurons[inside], point[s])
-            dist = np.einsum("kd,kd->k", d, d)
-            k = min(CLASS_CANDIDATES, dist.size)
+            d = diff_of_wrapped(neurons, point[s])
+            dist = np.where(inside, np.einsum("kd,kd->k", d, d), np.inf)
+            k = min(CLASS_CANDIDATES, n_inside)
             best = np.argpartition(dist, k - 1)[:k]
             distances.append(dist[best])
-            values.append(neurons[inside[best]])
+            values.append(neurons[best])
         # Every combination of one candidate per class, by summed squared distance.
         total = functools.reduce(np.add.outer, distances).ravel()
         order = np.argsort(total, kind="stable")[:count]
@@ -488,19 +490,31 @@ def _invalid_frames(checker, window_deg, root) -> int:
     return int(np.count_nonzero(colliding | floor))
 
 
-def _collision_free_first(candidates, checker, at_ends, wanted: int) -> tuple[list, int]:
-    """The candidates reordered: the first ``wanted`` collision-free ones (checked one
-    at a time, nearest first), then the others in their order; and how many of the
-    first are collision-free."""
-    free, colliding = [], []
-    for k, key in enumerate(candidates):
-        if checker.self_collision_pairs(key)[0] - at_ends:
-            colliding.append(key)
+def _keys_in_order(candidates, straight, checker, at_ends):
+    """The key candidates in the order their windows are tried, each with whether the
+    humanoid takes it without a self-collision that A and B do not have: the map's
+    nearest collision-free key, the alpha-point (``straight``, if collision-free), the
+    map's other collision-free keys, then its colliding ones. Checked lazily: only the
+    keys whose window is fitted cost a check."""
+    def free(key) -> bool:
+        return not checker.self_collision_pairs(key)[0] - at_ends
+
+    rest = iter(candidates)
+    colliding = []
+    for key in rest:
+        if free(key):
+            yield key, True
+            break
+        colliding.append(key)
+    if straight is not None and free(straight):
+        yield straight, True
+    for key in rest:
+        if free(key):
+            yield key, True
         else:
-            free.append(key)
-            if len(free) == wanted:
-                return free + colliding + list(candidates[k + 1:]), len(free)
-    return free + colliding, len(free)
+            colliding.append(key)
+    for key in colliding:
+        yield key, False
 
 
 def solve(problem: WindowProblem) -> WindowResult:
@@ -517,33 +531,26 @@ def solve(problem: WindowProblem) -> WindowResult:
     candidates = source.candidates(point, skeleton.limits_deg, widen)
     checker = source.checker(skeleton)
 
-    keys = candidates[:WINDOW_TRIES]
-    n_free = 0
-    if checker is not None:
+    if checker is None:
+        keys = iter([(candidates[0], None)])
+    else:
         end_pairs = checker.self_collision_pairs(np.stack([problem.a_deg, problem.b_deg]))
-        at_ends = frozenset().union(*end_pairs)
-        keys, n_free = _collision_free_first(candidates, checker, at_ends, WINDOW_TRIES)
-        if STRAIGHT_KEY:
-            # Second, after the map's nearest collision-free key (first if it has none).
-            straight = clamp_into_range(point, skeleton.limits_deg, widen)
-            if not checker.self_collision_pairs(straight)[0] - at_ends:
-                keys.insert(min(n_free, 1), straight)
-                n_free += 1
-        keys = keys[:WINDOW_TRIES]
-        n_free = min(n_free, WINDOW_TRIES)
+        straight = (clamp_into_range(point, skeleton.limits_deg, widen) if STRAIGHT_KEY
+                    else None)
+        keys = _keys_in_order(candidates, straight, checker, frozenset().union(*end_pairs))
 
     best = None
-    for attempt, key_wrapped in enumerate(keys):
+    for attempt, (key_wrapped, collision_free) in enumerate(itertools.islice(keys, WINDOW_TRIES)):
         key = _continuous_key(problem, key_wrapped)
         window, fit = fit_window(problem, _upm_curve(problem, key), lower, upper, constrained)
         invalid = 0
         if checker is not None:
             invalid = _invalid_frames(checker, window, problem.root_window)
         if best is None or invalid < best[0]:
-            best = (invalid, window, key_wrapped, fit, attempt)
+            best = (invalid, window, key_wrapped, fit, attempt, collision_free)
         if invalid == 0 or checker is None:
             break
-    invalid, window, key_wrapped, fit, attempt = best
+    invalid, window, key_wrapped, fit, attempt, collision_free = best
     diagnostics = {
         "key_candidate": float(attempt),
         "window_invalid_frames": float(invalid),
@@ -556,7 +563,7 @@ def solve(problem: WindowProblem) -> WindowResult:
         **fit,
     }
     if checker is not None:
-        diagnostics["key_collision_free"] = float(attempt < n_free)
+        diagnostics["key_collision_free"] = float(collision_free)
     return WindowResult(window, key_posture_deg=wrap_deg(key_wrapped), diagnostics=diagnostics)
 
 
