@@ -93,3 +93,27 @@ def test_names_are_unique_and_builders_required():
 def test_a_map_method_without_map_says_so(catalog):
     with pytest.raises(UsageError, match="needs --map MAP.npz"):
         build_key_source("feasible", KeySourceContext(catalog=catalog))
+
+
+def test_a_method_sees_the_windows_root(catalog):
+    """``transition`` hands every method the shared root of its window (a method may check
+    its frames against the floor with it): the root the joined motion gets."""
+    from upm.transitions import transition
+
+    seen = []
+
+    def solve(problem):
+        seen.append(problem.root_window)
+        return _solve(problem)
+
+    name = "test-root"
+    register(TransitionMethod(name=name, solve=solve, continuity="C0", key_kind=NAME,
+                              summary="test method", key_source=_build))
+    try:
+        before = catalog.load("02_01").frames(100, 140)
+        after = catalog.load("02_03").frames(20, 60)
+        result = transition(name, before, after, 10, 0.5, _AlphaPoint(catalog))
+    finally:
+        unregister(name)
+    assert seen[0].shape == (10, 6)
+    np.testing.assert_array_equal(seen[0], result.window_root)
