@@ -539,10 +539,11 @@ class _Search:
     below the reference's, or its up axis tilted below :data:`TROUBLE_UP`, or the
     simulation fails), the segment is run again from its saved start state in the next
     mode; when a segment has no modes left, the one before it (up to
-    :data:`MAX_BACKTRACK` back), and the segments after it start again from the first
-    mode. The search stops at :data:`SEARCH_BUDGET` times the reference's physics steps;
-    from then on, and where every mode within reach has been tried, the run goes on as
-    it is (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with
+    :data:`MAX_BACKTRACK` back), and the segments after it start again; the segments
+    after a changed one keep its mode for :data:`STICKY_S`. When the
+    search has spent :data:`SEARCH_BUDGET` times the reference's physics steps, or has
+    tried every mode within reach, the attempt that got furthest is run again and the
+    run goes on from it (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with
     sampled target offsets instead of a few discrete modes.
     """
 
@@ -558,6 +559,7 @@ class _Search:
         self.quiet_until = 0
         self.retries = 0
         self.restart = 1
+        self.best: tuple[int, dict] | None = None
 
     def _segment(self, t: int) -> int:
         return (t - 1) // self.every
@@ -573,12 +575,13 @@ class _Search:
                 mujoco.mj_copyData(copy_, self.sim, data)
                 self.saved[i] = copy_
 
-    def _mode_of(self, i: int) -> int:
+    def _mode_of(self, i: int, choice: dict | None = None) -> int:
         """Segment ``i``'s mode: its own choice, else that of the latest segment before
         it with one, within :data:`STICKY_S`, else the default."""
+        choice = self.choice if choice is None else choice
         for j in range(i, max(-1, i - self.sticky - 1), -1):
-            if j in self.choice:
-                return self.choice[j]
+            if j in choice:
+                return choice[j]
         return 0
 
     def mode(self, t: int) -> int:
@@ -597,31 +600,53 @@ class _Search:
         return bool(low or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
 
     def retry(self, data, t: int, steps: int) -> int | None:
-        """Restore the state for the next mode to try; returns the frame to run from,
-        or None (budget spent or no mode left within reach: go on as it is)."""
-        import mujoco
+        """Restore the state for the next attempt; returns the frame to run from, or
+        None (go on as it is).
 
-        if steps >= self.budget_steps:
-            self.quiet_until = self.n_frames
-            return None
+        When the budget is spent or no mode is left within reach, the attempt that got
+        furthest before its trouble is run again, if it is not this one, and the search
+        rests until past that point.
+        """
+        if self.best is None or t > self.best[0]:
+            self.best = (t, dict(self.choice))
         i = self._segment(t)
         back = i
         while back >= 0 and i - back <= MAX_BACKTRACK:
             if self._mode_of(back) + 1 < len(MODES):
                 break
             back -= 1
-        if back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
-            self.quiet_until = t + self.every
+        spent = steps >= self.budget_steps
+        if spent or back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
+            return self._give_up(data, t, spent)
+        choice = dict(self.choice)
+        choice[back] = self._mode_of(back) + 1
+        return self._restart(data, back, {j: m for j, m in choice.items() if j <= back})
+
+    def _give_up(self, data, t: int, spent: bool) -> int | None:
+        best_t, best_choice = self.best
+        self.best = None
+        self.quiet_until = self.n_frames if spent else max(t, best_t) + self.every
+        if best_t <= t:
             return None
-        self.choice[back] = self._mode_of(back) + 1
-        for j in [j for j in self.choice if j > back]:
-            del self.choice[j]
-        for j in [j for j in self.saved if j > back]:
+        old, new = self.choice, best_choice
+        differ = [j for j in range(self._segment(best_t) + 1)
+                  if self._mode_of(j) != self._mode_of(j, new)]
+        first = differ[0] if differ else self._segment(t)
+        if first not in self.saved:
+            self.choice = old
+            return None
+        return self._restart(data, first, new, quiet=self.quiet_until)
+
+    def _restart(self, data, segment: int, choice: dict, quiet: int = 0) -> int:
+        import mujoco
+
+        self.choice = choice
+        for j in [j for j in self.saved if j > segment]:
             del self.saved[j]
-        mujoco.mj_copyData(data, self.sim, self.saved[back])
-        self.quiet_until = 0
+        mujoco.mj_copyData(data, self.sim, self.saved[segment])
+        self.quiet_until = quiet
         self.retries += 1
-        self.restart = back * self.every + 1
+        self.restart = segment * self.every + 1
         return self.restart
 
 

@@ -110,3 +110,16 @@ def test_02_01_grounded(model02, walk):
     # only the root's height moves, and smoothly (no step above 1 mm per frame)
     np.testing.assert_array_equal(np.delete(grounded, 2, axis=1), np.delete(qpos, 2, axis=1))
     assert np.abs(np.diff(shift)).max() < 0.001
+
+
+def test_search_gives_up_on_the_attempt_that_got_furthest(search):
+    s, data, every = search
+    far = 2 * every + 10
+    _run_to(s, data, far)
+    assert s.retry(data, far, steps=0) == 2 * every + 1  # mode 1 for segment 2
+    assert s.mode(far) == 1
+    near = 2 * every + 3  # the new mode fails sooner, and the budget is spent
+    _run_to(s, data, near)
+    assert s.retry(data, near, steps=int(s.budget_steps)) == 2 * every + 1
+    assert s.mode(far) == 0 and data.time == 2 * every + 1  # the first attempt again
+    assert not s.in_trouble(data, far + 1)  # and no more search
