@@ -123,3 +123,18 @@ def test_search_gives_up_on_the_attempt_that_got_furthest(search):
     assert s.retry(data, near, steps=int(s.budget_steps)) == 2 * every + 1
     assert s.mode(far) == 0 and data.time == 2 * every + 1  # the first attempt again
     assert not s.in_trouble(data, far + 1)  # and no more search
+
+
+def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk, monkeypatch):
+    """Trouble everywhere (any pelvis height is 'too low'): the search goes back, tries
+    modes, spends its budget and settles on the attempt that got furthest; the torques it
+    recorded still replay open-loop to exactly the motion reported."""
+    monkeypatch.setattr(balance, "TROUBLE_DROP_M", -10.0)
+    monkeypatch.setattr(balance, "SEARCH_BUDGET", 3.0)
+    qpos = to_qpos(model02, walk)[:75]
+    run = balance.follow(model02, qpos, walk.fps)
+    assert run.retries > 0
+    assert run.simulated_steps > run.steps
+    assert run.segment_modes.max() > 0
+    again = balance.replay(model02, run)
+    np.testing.assert_allclose(again, run.qpos, atol=1e-9, equal_nan=True)
