@@ -196,7 +196,7 @@ def dof_curve_png(result, linear, path, dof: str | None = None) -> str:
 
     Returns the DOF drawn (``dof``, or the one where the two differ most).
     """
-    from eval.figures import plot_window_dof
+    from upm.dof_plot import plot_window_dof
 
     return plot_window_dof(path, {result.method: result, "linear": linear}, dof=dof)
 
