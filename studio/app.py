@@ -35,24 +35,15 @@ class Studio:
     """A running studio: a viser server drawing a :class:`~studio.session.Session`."""
 
     def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 8080):
-        import trimesh
         import viser
 
         self.session = session
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.port = self.server.get_port()
         self.lock = threading.Lock()
-        model = session.model
-        self._capsules = []
-        self._ghosts = []
-        for gid in capsule_geoms(model):
-            radius_m, half_m = model.geom_size[gid, :2]
-            mesh = trimesh.creation.capsule(height=2 * half_m, radius=radius_m, count=[8, 8])
-            self._capsules.append(self.server.scene.add_mesh_simple(
-                f"/body/g{gid}", mesh.vertices, mesh.faces, color=VALID_RGB))
-            self._ghosts.append(self.server.scene.add_mesh_simple(
-                f"/ghost/g{gid}", mesh.vertices, mesh.faces, color=GHOST_RGB, opacity=0.35,
-                visible=False))
+        self._capsules, self._ghosts = [], []
+        self.humanoid_model = None
+        self._build_humanoid(session.model)
         self.server.scene.add_grid("/floor", width=8.0, height=8.0, plane="xy")
         gui = self.server.gui
         clips = session.catalog.names() if hasattr(session.catalog, "names") else [
@@ -92,6 +83,24 @@ class Studio:
         self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
         self.server.initial_camera.position = (centre_m[0] + 3.5, centre_m[1] - 3.5, 2.2)
 
+    def _build_humanoid(self, model) -> None:
+        """Capsule meshes of ``model`` (and their ghosts) in the scene, replacing any drawn
+        before: the studio draws clip 1's subject, whose bone lengths and girths differ."""
+        import trimesh
+
+        for handle in self._capsules + self._ghosts:
+            handle.remove()
+        self._capsules, self._ghosts = [], []
+        for gid in capsule_geoms(model):
+            radius_m, half_m = model.geom_size[gid, :2]
+            mesh = trimesh.creation.capsule(height=2 * half_m, radius=radius_m, count=[8, 8])
+            self._capsules.append(self.server.scene.add_mesh_simple(
+                f"/body/g{gid}", mesh.vertices, mesh.faces, color=VALID_RGB))
+            self._ghosts.append(self.server.scene.add_mesh_simple(
+                f"/ghost/g{gid}", mesh.vertices, mesh.faces, color=GHOST_RGB, opacity=0.35,
+                visible=False))
+        self.humanoid_model = model
+
     def set(self, **values) -> Scene:
         """Set controls by name (``alpha=0.9``, ``method="snap"``...) and recompute.
 
@@ -124,6 +133,8 @@ class Studio:
             except Exception as error:  # shown in the page, the server keeps running
                 self.status.content = f"**error:** {error}"
                 return
+            if scene.model is not self.humanoid_model:  # clip 1 changed subject
+                self._build_humanoid(scene.model)
             self.scene, self.ghost = scene, ghost
             n = scene.geom_pos_m.shape[0]
             self.frame.max = n - 1
@@ -170,7 +181,7 @@ class Studio:
         from studio.session import physics_check
 
         self.report.content = "physics check running..."
-        rows = physics_check(self.session.model, self.scene.result)
+        rows = physics_check(self.scene.model, self.scene.result)
         lines = []
         for row in rows:
             cells = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"

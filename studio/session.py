@@ -32,6 +32,7 @@ class Scene:
     Attributes
     ----------
     result : upm.transitions.Transition
+    model : mujoco.MjModel, the humanoid the poses are of (clip 1's subject).
     geom_pos_m : (T, G, 3) array, world positions of the G capsules per frame.
     geom_wxyz : (T, G, 4) array, their orientations as unit quaternions.
     valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision,
@@ -43,6 +44,7 @@ class Scene:
     """
 
     result: object
+    model: object
     geom_pos_m: np.ndarray
     geom_wxyz: np.ndarray
     valid: np.ndarray
@@ -54,8 +56,6 @@ class Session:
     """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``."""
 
     def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60):
-        from humanoid_xml import catalog_model_path, load_model
-
         self.catalog = catalog
         self.map_path = map_path
         self.context = context
@@ -66,8 +66,20 @@ class Session:
         self.compare_method: str | None = None
         self.alpha = 0.5
         self.frames = 20
-        self.model = load_model(catalog_model_path(catalog, clip1))
+        self.subject: str | None = None
+        self.model = self.humanoid()
         self._sources: dict[str, object] = {}
+
+    def humanoid(self):
+        """The humanoid (``mujoco.MjModel``) of clip 1's subject, built again when clip 1
+        changes to a clip of another subject (the transition is on clip 1's skeleton)."""
+        from humanoid_xml import catalog_model_path, load_model
+
+        subject = self.catalog.info(self.clip1).subject
+        if subject != self.subject:
+            self.model = load_model(catalog_model_path(self.catalog, self.clip1))
+            self.subject = subject
+        return self.model
 
     def _source(self, method: str):
         if method not in self._sources:
@@ -100,12 +112,13 @@ class Session:
         from controller.validity import check_motion
 
         start = time.perf_counter()
+        model = self.humanoid()
         result = self.transition(method)
-        pos, wxyz = capsule_poses(self.model, to_qpos(self.model, result.motion))
-        validity = check_motion(self.model, result.motion, [result.window])
-        bodies = offending_bodies(self.model, validity)
-        offending = bodies[:, self.model.geom_bodyid[capsule_geoms(self.model)]]
-        return Scene(result, pos, wxyz, np.asarray(validity.valid, bool), offending,
+        pos, wxyz = capsule_poses(model, to_qpos(model, result.motion))
+        validity = check_motion(model, result.motion, [result.window])
+        bodies = offending_bodies(model, validity)
+        offending = bodies[:, model.geom_bodyid[capsule_geoms(model)]]
+        return Scene(result, model, pos, wxyz, np.asarray(validity.valid, bool), offending,
                      time.perf_counter() - start)
 
 
