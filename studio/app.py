@@ -41,6 +41,7 @@ class Studio:
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.port = self.server.get_port()
         self.lock = threading.Lock()
+        self._holding = False
         self._capsules, self._ghosts = [], []
         self.humanoid_model = None
         self._build_humanoid(session.model)
@@ -70,7 +71,7 @@ class Studio:
         check = gui.add_button("physics check (upm simulate)")
         check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
         self.report = gui.add_markdown("")
-        self.dof.on_update(lambda _: self.refresh())
+        self.dof.on_update(lambda _: self.apply_gui())
         for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
                        self.compare, self.alpha, self.frames):
             handle.on_update(lambda _: self.apply_gui())
@@ -107,13 +108,21 @@ class Studio:
         The server-side API: tests and scripts drive the page through it, and every
         connected browser sees the same controls move.
         """
-        for name, value in values.items():
-            getattr(self, name).value = value
+        # Assigning a value runs its handle's callbacks at once: held back here so that
+        # the scene is recomputed once for all the values, not once per value.
+        self._holding = True
+        try:
+            for name, value in values.items():
+                getattr(self, name).value = value
+        finally:
+            self._holding = False
         self.apply_gui()
         return self.scene
 
     def apply_gui(self) -> None:
         """Copy the GUI's values into the session and recompute (what every control calls)."""
+        if self._holding:
+            return
         s = self.session
         s.clip1, s.clip2 = self.clip1.value, self.clip2.value
         s.a_frame, s.b_frame = int(self.a_frame.value), int(self.b_frame.value)

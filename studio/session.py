@@ -53,14 +53,20 @@ class Scene:
 
 
 class Session:
-    """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``."""
+    """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``.
 
-    def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60):
+    ``key_sources`` (method name -> key-posture source) are used as given; the others are
+    built on first use from ``map_path`` and the catalogue.
+    """
+
+    def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60,
+                 key_sources: dict | None = None):
         self.catalog = catalog
         self.map_path = map_path
         self.context = context
         self.clip1, self.clip2 = clip1, clip2
-        self.a_frame = catalog.load(clip1).n_frames - 1
+        self._clips: dict[str, object] = {}
+        self.a_frame = self.clip(clip1).n_frames - 1
         self.b_frame = 0
         self.method = "linear"
         self.compare_method: str | None = None
@@ -68,7 +74,14 @@ class Session:
         self.frames = 20
         self.subject: str | None = None
         self.model = self.humanoid()
-        self._sources: dict[str, object] = {}
+        self._sources: dict[str, object] = dict(key_sources or {})
+
+    def clip(self, name: str):
+        """A clip of the catalogue (``upm.Motion``), read once: a slider move must not read
+        an AMC file again (tens of milliseconds)."""
+        if name not in self._clips:
+            self._clips[name] = self.catalog.load(name)
+        return self._clips[name]
 
     def humanoid(self):
         """The humanoid (``mujoco.MjModel``) of clip 1's subject, built again when clip 1
@@ -89,7 +102,7 @@ class Session:
     def _pieces(self):
         from upm.errors import UsageError
 
-        m1, m2 = self.catalog.load(self.clip1), self.catalog.load(self.clip2)
+        m1, m2 = self.clip(self.clip1), self.clip(self.clip2)
         if not 0 <= self.a_frame < m1.n_frames or not 0 <= self.b_frame < m2.n_frames:
             raise UsageError(f"frame out of range: {self.clip1}@{self.a_frame} "
                              f"({m1.n_frames} frames), {self.clip2}@{self.b_frame} "

@@ -166,7 +166,11 @@ def test_clip_1_of_another_subject_rebuilds_the_humanoid(catalog):
     studio = Studio(Session(catalog, "02_01", "02_03"), port=_free_port())
     try:
         first = studio.scene
+        calls = []
+        recompute = studio.session.recompute
+        studio.session.recompute = lambda *a: calls.append(a) or recompute(*a)
         second = studio.set(clip1="05_11", a_frame=100)
+        assert len(calls) == 1, "set() recomputes once for all its values"
         capsules = [np.asarray(h.vertices) for h in studio._capsules]
     finally:
         studio.stop()
