@@ -249,10 +249,17 @@ class ClassMaps:
 
     # -- training helpers ------------------------------------------------------------
     def _set_trained(self, neurons: dict[str, np.ndarray], postures: np.ndarray,
-                     clip_names, seconds: float, class_stats: dict) -> None:
+                     clip_names, seconds: float, class_stats: dict,
+                     errors: dict | None = None) -> None:
+        """Keep trained neurons; ``errors`` (per class: mean and largest distance of the
+        postures to the wrapped neurons) when the training measured them already."""
         self.neurons = {c: np.ascontiguousarray(wrap_deg(neurons[c])) for c in CLASS_NAMES}
         self._indexes, self._forest = {}, None
-        error = self.quantisation_error(postures)
+        if errors is None:
+            error = self.quantisation_error(postures)
+        else:
+            error = {c: {"mean_deg": errors[c][0], "max_deg": errors[c][1]}
+                     for c in CLASS_NAMES}
         self.stats = {
             c: {"neurons": len(self.neurons[c]),
                 "quantisation_error_mean_deg": error[c]["mean_deg"],
