@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from upm.angles import unwrap_deg
+
 _AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2}
 
 
@@ -39,6 +41,25 @@ def axis_rotation(angle_deg, axis: str) -> np.ndarray:
     return m
 
 
+def _entries():
+    """Flat positions in a (3 axes, 3, 3) array of the unit, cos, sin and -sin entries of
+    the three axis rotations (as :func:`axis_rotation` lays them out)."""
+    unit, cos, sin, minus_sin = [], [], [], []
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        unit.append(9 * i + 3 * i + i)
+        cos += [9 * i + 3 * j + j, 9 * i + 3 * k + k]
+        sin.append(9 * i + 3 * k + j)
+        minus_sin.append(9 * i + 3 * j + k)
+    # cos and sin of angle i fill their two / one entries of rotation i
+    return (np.array(unit), np.array(cos).reshape(3, 2), np.array(sin),
+            np.array(minus_sin))
+
+
+_UNIT, _COS_PAIRS, _SIN, _MINUS_SIN = _entries()
+_COS = _COS_PAIRS.T  # (2, 3): assigning c (..., 3) to each row fills both cos entries
+
+
 def euler_to_matrix(angles_deg, order: str = "XYZ") -> np.ndarray:
     """Compose per-axis rotations, the first letter of ``order`` applied first.
 
@@ -60,11 +81,18 @@ def euler_to_matrix(angles_deg, order: str = "XYZ") -> np.ndarray:
     a = np.asarray(angles_deg, dtype=float)
     if sorted(order) != ["X", "Y", "Z"]:
         raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
-    result = None
-    for axis in order:
-        r = axis_rotation(a[..., _AXIS_INDEX[axis]], axis)
-        result = r if result is None else r @ result
-    return result
+    # The rotations about X, Y and Z at once (the entries of axis_rotation, placed by
+    # index), then composed in order: a few array operations whatever the order.
+    theta = np.deg2rad(a)
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.zeros(a.shape[:-1] + (27,))
+    m[..., _UNIT] = 1.0
+    m[..., _COS] = c[..., None, :]
+    m[..., _SIN] = s
+    m[..., _MINUS_SIN] = -s
+    m = m.reshape(a.shape[:-1] + (3, 3, 3))
+    first, middle, last = (_AXIS_INDEX[axis] for axis in order)
+    return m[..., last, :, :] @ (m[..., middle, :, :] @ m[..., first, :, :])
 
 
 def _alternate_euler(angles_deg: np.ndarray, order: str) -> np.ndarray:
@@ -185,7 +213,7 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     parity = np.concatenate([[first_alt], first_alt ^ (np.cumsum(flips) % 2 == 1)])
     chosen = np.where(parity[:, None], alt, principal)
     chained = np.concatenate([start[None], chosen])
-    return np.unwrap(chained, period=360.0, axis=0)[1:]
+    return unwrap_deg(chained)[1:]
 
 
 def _shepperd_coefficients() -> np.ndarray:

@@ -36,7 +36,6 @@ import numpy as np
 
 from upm.angles import wrap_deg
 from upm.rotations import (
-    axis_rotation,
     continuous_euler_deg,
     euler_to_matrix,
     matrix_to_quaternion,
@@ -139,7 +138,9 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     if align_heading:
         heading_a, heading_b = heading_deg(rotations[k1 - 1:k1 + 1])
         turn = float(wrap_deg(heading_a - heading_b))
-    turn_matrix = axis_rotation(turn, "Y")
+    theta = np.deg2rad(turn)
+    c, s = np.cos(theta), np.sin(theta)
+    turn_matrix = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # axis_rotation Y
     rot_after = turn_matrix @ rot_after
 
     # Clip 2's translation relative to B, turned with it.
@@ -160,15 +161,16 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     query = np.arange(1, frames + 1, dtype=float)
 
     key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
-    heights = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
-    window[:, 1] = keyframe_spline(times, heights[:, None], query)[:, 0]
-
     key_rot = _slerp(rot_before[-1], rot_after[0], alpha)
     context_rots = np.concatenate([rot_before, rot_after[:k2]])
     vectors = rotation_log(key_rot.T @ context_rots)
-    vectors = np.concatenate([vectors[:k1], np.zeros((1, 3)), vectors[k1:]])
-    window_vectors = keyframe_spline(times, vectors, query)
-    window_rots = key_rot @ rotation_exp(window_vectors)
+    # Height and rotation vector through the same key times: one spline.
+    keys = np.zeros((k1 + 1 + k2, 4))
+    keys[:, 0] = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
+    keys[:k1, 1:], keys[k1 + 1:, 1:] = vectors[:k1], vectors[k1:]
+    splined = keyframe_spline(times, keys, query)
+    window[:, 1] = splined[:, 0]
+    window_rots = key_rot @ rotation_exp(splined[:, 1:])
 
     euler = continuous_euler_deg(np.concatenate([window_rots, rot_after]), order,
                                  before[-1, 3:])
