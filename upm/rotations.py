@@ -208,8 +208,13 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     # Branch of frame 0 from the start; afterwards, the principal solution "flips" at t
     # when its frame-t value is nearer the alternate solution of frame t-1 than the
     # principal one. The chosen branch is the running parity of the flips.
-    first_alt = distance(alt[0], start) < distance(principal[0], start)
-    flips = distance(principal[1:], alt[:-1]) < distance(principal[1:], principal[:-1])
+    # The four comparisons' distances in one call: frame 0's two solutions against the
+    # start, then each later principal against the previous frame's two.
+    n = principal.shape[0] - 1
+    d = distance(np.concatenate([alt[:1], principal[:1], principal[1:], principal[1:]]),
+                 np.concatenate([start[None], start[None], alt[:-1], principal[:-1]]))
+    first_alt = d[0] < d[1]
+    flips = d[2:2 + n] < d[2 + n:]
     parity = np.concatenate([[first_alt], first_alt ^ (np.cumsum(flips) % 2 == 1)])
     chosen = np.where(parity[:, None], alt, principal)
     chained = np.concatenate([start[None], chosen])

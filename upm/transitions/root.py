@@ -30,6 +30,7 @@
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,7 +81,11 @@ def heading_deg(matrix) -> np.ndarray:
         Degrees in [-180, 180): the angle theta of ``R = Ry(theta) S`` where S turns
         about a horizontal axis.
     """
-    q = matrix_to_quaternion(matrix)  # w, x, y, z with w >= 0
+    return _heading_of_quaternion(matrix_to_quaternion(matrix))
+
+
+def _heading_of_quaternion(q) -> np.ndarray:
+    """:func:`heading_deg` from unit quaternions ``(..., 4)`` (w, x, y, z; w >= 0)."""
     return wrap_deg(2.0 * np.degrees(np.arctan2(q[..., 2], q[..., 0])))
 
 
@@ -96,8 +101,36 @@ def leg_length_m(skeleton: Skeleton) -> float:
     return float(-rest_positions(skeleton)[:, 1].min())
 
 
-def _slerp(r0: np.ndarray, r1: np.ndarray, s: float) -> np.ndarray:
-    return r0 @ rotation_exp(s * rotation_log(r0.T @ r1))
+def _multiply(p, q):
+    """Hamilton product of quaternions given as (w, x, y, z) tuples of floats."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
+
+
+def _key_rotation(quat_a, quat_b, turn_deg: float, s: float) -> np.ndarray:
+    """The slerp at ``s`` from A to B turned by ``turn_deg`` about the vertical: the
+    rotation ``A exp(s log(A^T Ry(turn) B))`` (3, 3), the short way round, worked on
+    unit quaternions (w, x, y, z) in plain floats: a handful of scalar operations
+    instead of a matrix logarithm and exponential of one matrix each."""
+    half_turn = 0.5 * math.radians(turn_deg)
+    b = _multiply((math.cos(half_turn), 0.0, math.sin(half_turn), 0.0), tuple(quat_b))
+    aw, ax, ay, az = quat_a
+    r = _multiply((aw, -ax, -ay, -az), b)
+    if r[0] < 0.0:
+        r = tuple(-c for c in r)
+    sine = math.sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3])
+    if sine > 1e-12:
+        half = s * math.atan2(sine, r[0])
+        f = math.sin(half) / sine
+        step = (math.cos(half), f * r[1], f * r[2], f * r[3])
+    else:
+        step = (1.0, 0.0, 0.0, 0.0)
+    w, x, y, z = _multiply((aw, ax, ay, az), step)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
@@ -134,9 +167,10 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     # their fixed overhead, not their arithmetic).
     rotations = euler_to_matrix(np.concatenate([before[-k1:, 3:], after[:, 3:]]), order)
     rot_before, rot_after = rotations[:k1], rotations[k1:]
+    quat_a, quat_b = matrix_to_quaternion(rotations[k1 - 1:k1 + 1]).tolist()
     turn = 0.0
     if align_heading:
-        heading_a, heading_b = heading_deg(rotations[k1 - 1:k1 + 1])
+        heading_a, heading_b = _heading_of_quaternion(np.array([quat_a, quat_b]))
         turn = float(wrap_deg(heading_a - heading_b))
     theta = np.deg2rad(turn)
     c, s = np.cos(theta), np.sin(theta)
@@ -161,7 +195,7 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     query = np.arange(1, frames + 1, dtype=float)
 
     key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
-    key_rot = _slerp(rot_before[-1], rot_after[0], alpha)
+    key_rot = _key_rotation(quat_a, quat_b, turn, alpha)
     context_rots = np.concatenate([rot_before, rot_after[:k2]])
     vectors = rotation_log(key_rot.T @ context_rots)
     # Height and rotation vector through the same key times: one spline.
