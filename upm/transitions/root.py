@@ -44,9 +44,9 @@ from upm.rotations import (
     rotation_log,
 )
 from upm.skeleton import Skeleton
-from upm.transitions.spline import SPLINE_CONTEXT, keyframe_spline
+from upm.transitions.spline import SPLINE_CONTEXT, spline_weights
 
-_HORIZONTAL = [0, 2]
+_HORIZONTAL = slice(0, 3, 2)  # tx, tz (a slice: views, not fancy-index copies)
 
 
 @dataclass(frozen=True)
@@ -133,6 +133,16 @@ def _key_rotation(quat_a, quat_b, turn_deg: float, s: float) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
+@functools.lru_cache(maxsize=64)
+def _spline_weights(k1: int, k2: int, frames: int) -> np.ndarray:
+    """The root splines' weights (L, k1 + 1 + k2): key frames at the last ``k1`` frames
+    of clip 1 (A at 0), the key at the window's middle and the first ``k2`` of clip 2
+    (B at L + 1), evaluated at the window's frames 1 .. L."""
+    n_steps = frames + 1
+    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
+    return spline_weights(times, np.arange(1, frames + 1, dtype=float))
+
+
 def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
                align_heading: bool = True, context: int = SPLINE_CONTEXT) -> RootBlend:
     """The root of the window, and clip 2's root re-anchored after it.
@@ -191,8 +201,6 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     new_after[:, _HORIZONTAL] = path[frames] + relative[:, _HORIZONTAL]
     new_after[:, 1] = after[:, 1]
 
-    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
-    query = np.arange(1, frames + 1, dtype=float)
 
     key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
     key_rot = _key_rotation(quat_a, quat_b, turn, alpha)
@@ -202,7 +210,7 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     keys = np.zeros((k1 + 1 + k2, 4))
     keys[:, 0] = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
     keys[:k1, 1:], keys[k1 + 1:, 1:] = vectors[:k1], vectors[k1:]
-    splined = keyframe_spline(times, keys, query)
+    splined = _spline_weights(k1, k2, frames) @ keys
     window[:, 1] = splined[:, 0]
     window_rots = key_rot @ rotation_exp(splined[:, 1:])
 
