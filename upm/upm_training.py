@@ -103,13 +103,19 @@ class _GrowingMap:
 
 
 def _segment_min(values: np.ndarray, segment: np.ndarray, n_segments: int):
-    """Position of the minimum of ``values`` within each segment id (-1 if empty)."""
-    order = np.lexsort((values, segment))
-    first = np.searchsorted(segment[order], np.arange(n_segments))
-    found = first < len(order)
-    found[found] &= segment[order][first[found]] == np.arange(n_segments)[found]
+    """Position of the minimum of ``values`` within each segment id (-1 if empty; the
+    first position among equal minima). ``segment`` is sorted (the graph's rows come in
+    order), so each segment is a run: a ``reduceat`` instead of a sort."""
+    ids = np.arange(n_segments)
+    starts = np.searchsorted(segment, ids)
+    counts = np.searchsorted(segment, ids, side="right") - starts
+    filled = counts > 0
     pos = np.full(n_segments, -1)
-    pos[found] = order[first[found]]
+    if not filled.any():
+        return pos
+    least = np.minimum.reduceat(values, starts[filled])
+    at_min = np.flatnonzero(values == np.repeat(least, counts[filled]))
+    pos[filled] = at_min[np.searchsorted(segment[at_min], ids[filled])]
     return pos
 
 
@@ -127,13 +133,16 @@ class _Snapshot:
         self.index = AngularIndex(self.weights0)
         # Chord <= wrapped distance: the chord pairs are a superset; keep the exact ones.
         pairs = self.index.tree.query_pairs(radius, output_type="ndarray")
+        pair_dist = np.sqrt(rowwise_sq_deg(self.weights0[pairs[:, 0]],
+                                           self.weights0[pairs[:, 1]]))
+        pairs, pair_dist = pairs[pair_dist <= radius], pair_dist[pair_dist <= radius]
         selves = np.arange(self.size)
         ci = np.concatenate([pairs[:, 0], pairs[:, 1], selves])
         ni = np.concatenate([pairs[:, 1], pairs[:, 0], selves])
-        dist = np.sqrt(rowwise_sq_deg(self.weights0[ci], self.weights0[ni]))
-        keep = dist <= radius
-        order = np.lexsort((ni[keep], ci[keep]))
-        ci, ni, dist = ci[keep][order], ni[keep][order], dist[keep][order]
+        dist = np.concatenate([pair_dist, pair_dist, np.zeros(self.size)])
+        # By centre, then neuron: one key per (unique) pair, so any sort gives this order.
+        order = np.argsort(ci * self.size + ni)
+        ci, ni, dist = ci[order], ni[order], dist[order]
         self.indptr = np.searchsorted(ci, np.arange(self.size + 1))
         self.indices = ni
         self.dist = dist
