@@ -221,37 +221,11 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     return unwrap_deg(chained)[1:]
 
 
-def _shepperd_coefficients() -> np.ndarray:
-    """(10, 16): ``[1, m00, m01, ..., m22] @ C`` gives Shepperd's four candidate rows
-    (each 4 components, flattened) of :func:`matrix_to_quaternion`."""
-    c = np.zeros((10, 4, 4))
-
-    def entry(i, j):
-        return 1 + 3 * i + j
-
-    signs = ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))
-    for row, (s0, s1, s2) in enumerate(signs):  # the diagonal entry of candidate row
-        c[0, row, row] = 1.0
-        c[entry(0, 0), row, row], c[entry(1, 1), row, row], c[entry(2, 2), row, row] = s0, s1, s2
-    # Off-diagonal entries: (row, col) -> (a, b, sign): m[a] + sign * m[b].
-    pairs = {(0, 1): ((2, 1), (1, 2), -1), (0, 2): ((0, 2), (2, 0), -1),
-             (0, 3): ((1, 0), (0, 1), -1), (1, 2): ((0, 1), (1, 0), 1),
-             (1, 3): ((0, 2), (2, 0), 1), (2, 3): ((1, 2), (2, 1), 1)}
-    for (row, col), (a, b, sign) in pairs.items():
-        for r, k in ((row, col), (col, row)):
-            c[entry(*a), r, k] = 1.0
-            c[entry(*b), r, k] = sign
-    return c.reshape(10, 16)
-
-
-_SHEPPERD = _shepperd_coefficients()
-
-
 def matrix_to_quaternion(matrix) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` of rotation matrices, with ``w >= 0``.
 
-    Shepperd's method (the largest of the four diagonal combinations), vectorised: the
-    four candidate rows are one linear map of the matrix entries.
+    Shepperd's method: the largest of the four diagonal combinations gives the
+    best-conditioned row (compiled loop: :mod:`upm.rotation_kernels`).
 
     Parameters
     ----------
@@ -261,16 +235,10 @@ def matrix_to_quaternion(matrix) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
     """
+    from upm.rotation_kernels import quaternions
+
     m = np.asarray(matrix, dtype=float)
-    shape = m.shape[:-2]
-    flat = m.reshape(-1, 9)
-    candidates = (flat @ _SHEPPERD[1:] + _SHEPPERD[0]).reshape(-1, 4, 4)
-    rows = np.arange(len(flat))
-    best = np.argmax(candidates[:, (0, 1, 2, 3), (0, 1, 2, 3)], axis=1)
-    q = candidates[rows, best]
-    q /= np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
-    q[q[:, 0] < 0] *= -1.0
-    return q.reshape(shape + (4,))
+    return quaternions(np.ascontiguousarray(m.reshape(-1, 9))).reshape(m.shape[:-2] + (4,))
 
 
 def rotation_log(matrix) -> np.ndarray:
@@ -284,12 +252,10 @@ def rotation_log(matrix) -> np.ndarray:
     -------
     ndarray, shape (..., 3)
     """
-    q = matrix_to_quaternion(matrix)
-    sine = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sine, q[..., :1])
-    # angle / sin(angle / 2) -> 2 as the angle -> 0.
-    scale = np.where(sine > 1e-12, angle / np.where(sine > 1e-12, sine, 1.0), 2.0)
-    return scale * q[..., 1:]
+    from upm.rotation_kernels import logs
+
+    m = np.asarray(matrix, dtype=float)
+    return logs(np.ascontiguousarray(m.reshape(-1, 9))).reshape(m.shape[:-2] + (3,))
 
 
 def rotation_exp(rotvec) -> np.ndarray:
@@ -303,13 +269,7 @@ def rotation_exp(rotvec) -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
     """
+    from upm.rotation_kernels import exps
+
     v = np.asarray(rotvec, dtype=float)
-    theta = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = np.zeros(v.shape[:-1] + (3, 3))
-    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
-    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
-    small = theta < 1e-8
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
-    return np.eye(3) + a * k + b * (k @ k)
+    return exps(np.ascontiguousarray(v.reshape(-1, 3))).reshape(v.shape[:-1] + (3, 3))
