@@ -81,3 +81,64 @@ def exps(vectors):
         out[n, 7] = a * x + b * y * z
         out[n, 8] = 1.0 - b * (x * x + y * y)
     return out
+
+
+@njit(cache=True, nogil=True)
+def continuous_euler(flat, first_axis, middle_axis, last_axis, sign, start, lock_cos):
+    """The loop behind :func:`upm.rotations.continuous_euler_deg`: per frame the principal
+    Tait-Bryan angles of ``flat`` (T, 9) (order ``first_axis, middle_axis, last_axis``;
+    ``sign`` +1 for a cyclic order), the branch nearer the previous frame's, and whole
+    turns removed along time from ``start`` (3,) as ``np.unwrap`` removes them."""
+    n = flat.shape[0]
+    out = np.empty((n, 3))
+    i, j, k, e = first_axis, middle_axis, last_axis, sign
+    prev_principal = np.empty(3)
+    prev_alt = np.empty(3)
+    principal = np.empty(3)
+    alt = np.empty(3)
+    chosen_prev = start.copy()
+    correction = np.zeros(3)
+    use_alt = False
+    for t in range(n):
+        m = flat[t]
+        cos_middle = math.hypot(m[3 * i + i], m[3 * j + i])
+        middle = math.atan2(-e * m[3 * k + i], cos_middle)
+        if cos_middle < lock_cos:  # gimbal lock: only first +- last is defined; last = 0
+            first = math.atan2(-e * m[3 * j + k], m[3 * j + j])
+            last = 0.0
+        else:
+            first = math.atan2(e * m[3 * k + j], m[3 * k + k])
+            last = math.atan2(e * m[3 * j + i], m[3 * i + i])
+        principal[i], principal[j], principal[k] = first, middle, last
+        for c in range(3):
+            principal[c] = principal[c] * (180.0 / math.pi)
+        alt[:] = principal
+        alt[i] += 180.0
+        alt[j] = 180.0 - alt[j]
+        alt[k] += 180.0
+        if t == 0:
+            use_alt = _distance(alt, start) < _distance(principal, start)
+        elif _distance(principal, prev_alt) < _distance(principal, prev_principal):
+            use_alt = not use_alt
+        prev_principal[:] = principal
+        prev_alt[:] = alt
+        for c in range(3):
+            x = alt[c] if use_alt else principal[c]
+            dd = x - chosen_prev[c]
+            ddmod = (dd + 180.0) % 360.0 - 180.0
+            if ddmod == -180.0 and dd > 0.0:
+                ddmod = 180.0
+            if abs(dd) >= 180.0:
+                correction[c] += ddmod - dd
+            out[t, c] = x + correction[c]
+            chosen_prev[c] = x
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _distance(x, y):
+    s = 0.0
+    for c in range(3):
+        d = (x[c] - y[c] + 180.0) % 360.0 - 180.0
+        s += d * d
+    return s

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.angles import unwrap_deg
-
 _AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2}
 
 
@@ -178,8 +176,8 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     Each frame takes the Tait-Bryan solution (of the two) and the whole turn nearest to
     the previous frame's angles, so a smooth rotation path gives angles without
     360-degree or branch jumps (except through gimbal lock, where the angles of any
-    representation change fast). Vectorised: the branch of each frame follows from
-    whether the principal solution switches branch between consecutive frames.
+    representation change fast): the principal solution switches branch at frame t when
+    it is nearer the previous frame's alternate solution than its principal one.
 
     Parameters
     ----------
@@ -195,30 +193,19 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     -------
     ndarray, shape (T, 3)
     """
-    principal = matrix_to_euler_deg(matrix, order)
-    if principal.shape[0] == 0:
-        return principal
-    alt = _alternate_euler(principal, order)
-    start = np.asarray(start_deg, dtype=float)
+    from upm.rotation_kernels import continuous_euler
 
-    def distance(x, y):
-        d = np.mod(x - y + 180.0, 360.0) - 180.0
-        return np.einsum("...i,...i->...", d, d)
-
-    # Branch of frame 0 from the start; afterwards, the principal solution "flips" at t
-    # when its frame-t value is nearer the alternate solution of frame t-1 than the
-    # principal one. The chosen branch is the running parity of the flips.
-    # The four comparisons' distances in one call: frame 0's two solutions against the
-    # start, then each later principal against the previous frame's two.
-    n = principal.shape[0] - 1
-    d = distance(np.concatenate([alt[:1], principal[:1], principal[1:], principal[1:]]),
-                 np.concatenate([start[None], start[None], alt[:-1], principal[:-1]]))
-    first_alt = d[0] < d[1]
-    flips = d[2:2 + n] < d[2 + n:]
-    parity = np.concatenate([[first_alt], first_alt ^ (np.cumsum(flips) % 2 == 1)])
-    chosen = np.where(parity[:, None], alt, principal)
-    chained = np.concatenate([start[None], chosen])
-    return unwrap_deg(chained)[1:]
+    m = np.asarray(matrix, dtype=float)
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
+    if m.shape[0] == 0:
+        return np.zeros((0, 3))
+    # The principal solution as matrix_to_euler_deg gives it; branch and turns in one
+    # compiled pass along time (:func:`upm.rotation_kernels.continuous_euler`).
+    i, j, k = (_AXIS_INDEX[axis] for axis in order)
+    return continuous_euler(np.ascontiguousarray(m.reshape(-1, 9)), i, j, k,
+                            1.0 if (j - i) % 3 == 1 else -1.0,
+                            np.array(start_deg, dtype=float).reshape(3), _GIMBAL_LOCK_COS)
 
 
 def matrix_to_quaternion(matrix) -> np.ndarray:
