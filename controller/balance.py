@@ -2,8 +2,9 @@
 
 At every physics step (``mj_step1``, control, ``mj_step2``) the controller
 
-1. takes the reference at the step's time: the 12 Hz low-passed reference (mocap
-   glitches such as 16_15's left arm, missing for its first 2 frames, are not targets),
+1. takes the reference at the step's time: marker dropouts filled
+   (:mod:`controller.dropouts`: 16_15's left arm reads zero for its first 2 frames, then
+   jumps by 76 degrees), then low-passed at 12 Hz (mocap glitches are not targets),
    re-anchored in height so that its first frame's lowest point is 1 mm into the floor
    (mocap feet hover by centimetres); hinges and root position interpolated linearly
    between frames, the root quaternion by normalised linear interpolation, velocities and
@@ -27,8 +28,12 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
 Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
 :data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
 copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
-reference's height and upright: the controller's balance is thin (which walks it gets
-through changes with the gain), and the rollouts pick, at about 4 times the cost.
+reference's height and upright. Where the character still gets into trouble (pelvis well
+below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
+runs the last segments again in other :data:`MODES` (placement gain, which swing-foot
+contacts the plan leans on) from their saved states. The controller's balance is thin
+(which walks it gets through changes with these choices), and the search buys robustness
+where it is needed, at the cost of the segments it runs again (``simulated_steps``).
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run. The controller has no
@@ -78,16 +83,35 @@ DAMPING_RATIO = 1.0
 MAX_ACCELERATION = 300.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
-#: Foot-placement gains chosen among by short rollouts (one entry: no selection) ...
+#: The controller's modes, tried in this order where the default leads to trouble: the
+#: foot-placement gain, which floor contacts of the foot the reference has in the air are
+#: not planned as support ("none"; "toes": a swing toe that scrapes the floor is not
+#: pinned to it; "foot": no contact of that foot), and the swing ankle's clearance above
+#: the reference's, metres (:mod:`controller.placement`). The first is the default.
+MODES = ((0.3, "none", 0.0), (0.3, "none", 0.04), (0.6, "none", 0.02), (0.3, "toes", 0.04),
+         (0.6, "toes", 0.04), (0.3, "foot", 0.04))
+#: Foot-placement gains chosen among by short rollouts for the default mode ...
 SELECT_GAINS = (0.3, 0.6)
 #: ... every this many seconds ...
 SELECT_EVERY_S = 0.5
 #: ... each rolled out this far ahead.
 LOOKAHEAD_S = 1.0
-#: Floor contacts of a foot the reference has in the air are not planned as support.
-SWING_EXCLUDE = False
+#: The search: each segment of this many seconds runs in one mode ...
+SEGMENT_S = 0.25
+#: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
+#: far from vertical) is run again in the next mode, then its predecessors, up to this
+#: many segments back ...
+TROUBLE_DROP_M = 0.12
+TROUBLE_UP = 0.8
+MAX_BACKTRACK = 6
+#: ... and the segments after a changed one keep its mode for this long ...
+STICKY_S = 2.0
+#: ... within this many times the reference's physics steps in all.
+SEARCH_BUDGET = 10.0
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
+#: Put every standing frame of the reference on the floor (:mod:`controller.grounding`).
+GROUND = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
@@ -138,6 +162,13 @@ class BalanceRun:
         Simulated seconds.
     raw_step_s : float
         Wall seconds of one raw ``mj_step`` of the same model, timed in the same run.
+    segment_modes : ndarray of int, shape (segments,)
+        The index in :data:`MODES` each :data:`SEGMENT_S` segment ran in.
+    retries : int
+        Segments run again by the search.
+    simulated_steps : int
+        Physics steps taken in all, the search's included (``steps`` of them are the
+        run's own).
     """
 
     fps: float
@@ -167,6 +198,9 @@ class BalanceRun:
     wall_s: float
     sim_s: float
     raw_step_s: float
+    segment_modes: np.ndarray
+    retries: int
+    simulated_steps: int
 
     @property
     def steps(self) -> int:
@@ -232,8 +266,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     import mujoco
 
     from controller.body import body_figures
+    from controller.dropouts import fill_dropouts
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
+    from controller.grounding import ground_reference
     from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
@@ -242,7 +278,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.wbc import WholeBodyID
     from upm.progress import progress as progress_bar
 
-    ref = unwrap_hinges(model, reference_qpos)
+    ref = unwrap_hinges(model, fill_dropouts(model, reference_qpos)[0])
     n_frames = ref.shape[0]
     if n_frames < 2:
         raise ValueError("following needs a reference of at least 2 frames")
@@ -270,6 +306,11 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
     ref[:, 2] += height_shift
     smooth[:, 2] += height_shift
+    if GROUND:
+        # and every standing frame on the floor (controller.grounding)
+        down = FootPlacement(sim, ref, fps).ref_down
+        smooth, ground_shift = ground_reference(sim, smooth, fps, down)
+        ref[:, 2] += ground_shift
     ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
     start = smooth[0].copy()
     start_qvel = ref_qvel[0].copy()
@@ -280,7 +321,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     placement = FootPlacement(sim, ref, fps)
     control = _Control(sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
                        (low, high), torque_range)
-    gain = placement.gain
     pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
@@ -303,25 +343,46 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     diverged = None
     steps = 0
     external = 0.0
+    search = _Search(sim, n_frames, fps, substeps, ref_pelvis, pelvis_body)
     selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
+    selected = {}
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
     with collected_warnings(), bar:
-        for t in range(1, n_frames):
-            if selector is not None and (t - 1) % selector.every_frames == 0:
-                gain = selector.choose(data, t - 1)
+        t = 1
+        while t < n_frames:
+            search.enter(data, t)
+            gain, exclude, clearance = MODES[search.mode(t)]
+            if selector is not None and search.mode(t) == 0:
+                # the default mode's gain, chosen by lookahead (once per start frame)
+                first = (t - 1) - (t - 1) % selector.every_frames
+                if first not in selected:
+                    selected[first] = selector.choose(data, first) if first == t - 1 else gain
+                gain = selected[first]
             for k in range((t - 1) * substeps, t * substeps):
-                applied, tau = control.step(data, k, gain)
+                applied, tau = control.step(data, k, gain, exclude, clearance)
                 ctrl[k] = applied
                 steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
-            bar.update(1)
+            bar.n = max(bar.n, t)
+            bar.refresh() if progress else None
             if fatal(data) or not np.all(np.isfinite(data.qpos)):
+                back = search.retry(data, t, steps)
+                if back is not None:
+                    t, fall, stop_frame = back, None, n_frames
+                    continue
                 diverged = t
                 stop_frame = t
                 break
+            if search.in_trouble(data, t):
+                back = search.retry(data, t, steps)
+                if back is not None:
+                    t, fall, stop_frame = back, None, n_frames
+                    for first in [f for f in selected if f >= back - 1]:
+                        del selected[first]
+                    continue
             qpos[t] = data.qpos
             contact[t] = _floor_normal_force(sim, data)
             torque[t] = data.actuator_force
@@ -337,9 +398,17 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     stop_frame = min(n_frames, t + 1 + int(round(AFTER_FALL_S * fps)))
             if t + 1 >= stop_frame:
                 break
+            t += 1
+    stop_frame = min(stop_frame, t + 1)
+    qpos[stop_frame:] = np.nan
+    contact[stop_frame:] = np.nan
+    torque[stop_frame:] = np.nan
+    ctrl_steps = (stop_frame - 1) * substeps
     wall = time.perf_counter() - clock
-    ctrl = ctrl[:steps]
+    ctrl = ctrl[:ctrl_steps]
     saturated[stop_frame:] = False
+    limit_rows[stop_frame:] = 0
+    self_contacts[stop_frame:] = 0
 
     joint_err, body_err, drift, com_err = reference_errors(sim, qpos, ref)
     return BalanceRun(
@@ -352,7 +421,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
         warnings=warning_counts(data),
         external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
-        sim_s=steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
+        sim_s=ctrl_steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
+        segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
     )
 
 
@@ -361,6 +431,8 @@ class _Control:
 
     def __init__(self, sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
                  target_range, torque_range):
+        import mujoco
+
         from controller.qpos import joint_layout
 
         self.sim, self.smooth = sim, smooth
@@ -374,8 +446,18 @@ class _Control:
         self.low_nm, self.high_nm = np.asarray(torque_range).T
         self.q_ref = np.empty(sim.nq)
         self.err = np.zeros(sim.nv)
+        self.toes = {b for b in range(sim.nbody)
+                     if "toes" in (mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_BODY, b) or "")}
 
-    def step(self, data, k: int, gain: float):
+    def _excluded(self, how: str, frame: int):
+        """The bodies whose floor contacts the plan does not lean on (see :data:`MODES`)."""
+        if how == "none":
+            return ()
+        swing = self.placement.swing_bodies(frame)
+        return swing & self.toes if how == "toes" else swing
+
+    def step(self, data, k: int, gain: float, exclude: str = "none",
+             clearance_m: float | None = None):
         """Control and take physics step ``k``; returns the applied and the planned
         torques, (nu,) each."""
         import mujoco
@@ -397,13 +479,13 @@ class _Control:
             qdd_ref[self.hinge_v[clipped]] = 0.0
         frame = min(int(round(s)), n_frames - 1)
         if PLACEMENT:
-            self.placement.adjust(data, frame, q_ref, gain)
+            self.placement.adjust(data, frame, q_ref, gain, clearance_m)
         mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
         qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
         np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
         tau, _, _ = self.solver.solve(
             data, qdd_des,
-            exclude=self.placement.swing_bodies(frame) if SWING_EXCLUDE else ())
+            exclude=self._excluded(exclude, frame))
         applied = np.clip(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied
         mujoco.mj_step2(sim, data)
@@ -437,7 +519,7 @@ class _GainSelector:
             cost = 0.0
             for t in range(frame + 1, last + 1):
                 for k in range((t - 1) * control.substeps, t * control.substeps):
-                    control.step(scratch, k, gain)
+                    control.step(scratch, k, gain, "none", MODES[0][2])
                 if not np.all(np.isfinite(scratch.qpos)):
                     cost = math.inf
                     break
@@ -447,6 +529,100 @@ class _GainSelector:
             if cost < best_cost:
                 best, best_cost = gain, cost
         return best
+
+
+class _Search:
+    """Backtracking over the controller's :data:`MODES`, segment by segment.
+
+    The run is cut into segments of :data:`SEGMENT_S`; each runs in one mode, the first
+    by default. When the character gets into trouble (pelvis :data:`TROUBLE_DROP_M`
+    below the reference's, or its up axis tilted below :data:`TROUBLE_UP`, or the
+    simulation fails), the segment is run again from its saved start state in the next
+    mode; when a segment has no modes left, the one before it (up to
+    :data:`MAX_BACKTRACK` back), and the segments after it start again from the first
+    mode. The search stops at :data:`SEARCH_BUDGET` times the reference's physics steps;
+    from then on, and where every mode within reach has been tried, the run goes on as
+    it is (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with
+    sampled target offsets instead of a few discrete modes.
+    """
+
+    def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_pelvis,
+                 pelvis_body: int):
+        self.sim, self.n_frames = sim, n_frames
+        self.every = max(1, int(round(SEGMENT_S * fps)))
+        self.sticky = int(round(STICKY_S / SEGMENT_S))
+        self.ref_pelvis, self.pelvis_body = ref_pelvis, pelvis_body
+        self.budget_steps = SEARCH_BUDGET * (n_frames - 1) * substeps
+        self.choice: dict[int, int] = {}
+        self.saved: dict[int, object] = {}
+        self.quiet_until = 0
+        self.retries = 0
+        self.restart = 1
+
+    def _segment(self, t: int) -> int:
+        return (t - 1) // self.every
+
+    def enter(self, data, t: int) -> None:
+        """Save the state at the start of a segment (before frame ``t``'s steps)."""
+        import mujoco
+
+        if (t - 1) % self.every == 0:
+            i = self._segment(t)
+            if i not in self.saved:
+                copy_ = mujoco.MjData(self.sim)
+                mujoco.mj_copyData(copy_, self.sim, data)
+                self.saved[i] = copy_
+
+    def _mode_of(self, i: int) -> int:
+        """Segment ``i``'s mode: its own choice, else that of the latest segment before
+        it with one, within :data:`STICKY_S`, else the default."""
+        for j in range(i, max(-1, i - self.sticky - 1), -1):
+            if j in self.choice:
+                return self.choice[j]
+        return 0
+
+    def mode(self, t: int) -> int:
+        """The index in :data:`MODES` of frame ``t``'s segment."""
+        return self._mode_of(self._segment(t))
+
+    def modes(self) -> np.ndarray:
+        """The mode of every segment, int array (segments,)."""
+        n = self._segment(self.n_frames - 1) + 1
+        return np.array([self._mode_of(i) for i in range(n)], dtype=int)
+
+    def in_trouble(self, data, t: int) -> bool:
+        if t <= self.quiet_until:
+            return False
+        low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
+        return bool(low or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
+
+    def retry(self, data, t: int, steps: int) -> int | None:
+        """Restore the state for the next mode to try; returns the frame to run from,
+        or None (budget spent or no mode left within reach: go on as it is)."""
+        import mujoco
+
+        if steps >= self.budget_steps:
+            self.quiet_until = self.n_frames
+            return None
+        i = self._segment(t)
+        back = i
+        while back >= 0 and i - back <= MAX_BACKTRACK:
+            if self._mode_of(back) + 1 < len(MODES):
+                break
+            back -= 1
+        if back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
+            self.quiet_until = t + self.every
+            return None
+        self.choice[back] = self._mode_of(back) + 1
+        for j in [j for j in self.choice if j > back]:
+            del self.choice[j]
+        for j in [j for j in self.saved if j > back]:
+            del self.saved[j]
+        mujoco.mj_copyData(data, self.sim, self.saved[back])
+        self.quiet_until = 0
+        self.retries += 1
+        self.restart = back * self.every + 1
+        return self.restart
 
 
 def replay(model, run: BalanceRun) -> np.ndarray:

@@ -117,6 +117,9 @@ class BalanceTracking:
             "limit_active_frames": int((run.limit_rows > 0).sum()),
             "self_contact_frames": int((run.self_contacts > 0).sum()),
             "raw_step_s": run.raw_step_s,
+            "search_retries": run.retries,
+            "simulated_steps": run.simulated_steps,
+            "segment_modes": run.segment_modes.tolist(),
             **self.summary(),
         }
 

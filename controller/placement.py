@@ -31,6 +31,12 @@ FOOT_DOWN_SPEED_MPS = 0.8
 FOOT_DOWN_HEIGHT_M = 0.08
 #: Also keep the swing ankle at least at the reference's height (hip and knee).
 SWING_HEIGHT = True
+#: Compare with the reference's stance foot where the reference has it down, at the
+#: nearest such frame (not where it swings).
+NEAREST_DOWN = True
+#: Extra height of the swing ankle above the reference's while the reference swings it,
+#: metres (the default; the balance controller's modes choose their own).
+SWING_CLEARANCE_M = 0.0
 _SIDES = ("l", "r")
 
 
@@ -93,8 +99,19 @@ class FootPlacement:
         height = self.ref_ankle[:, :, 2]
         low = height < height.min(axis=0) + FOOT_DOWN_HEIGHT_M
         self.ref_down = (speed < FOOT_DOWN_SPEED_MPS) & low  # (T, 2)
+        self._down_frames = [np.flatnonzero(self.ref_down[:, side]) for side in range(2)]
         g = float(np.linalg.norm(model.opt.gravity))
         self.time_constant_s = math.sqrt(max(float(np.median(self.ref_com[:, 2])), 0.1) / g)
+
+    def _down_frame(self, frame: int, side: int) -> int:
+        """The frame nearest ``frame`` at which the reference has foot ``side`` down
+        (``frame`` itself when it is down, or never is)."""
+        down = self._down_frames[side]
+        if self.ref_down[frame, side] or not down.size:
+            return frame
+        k = int(np.searchsorted(down, frame))
+        near = [down[j] for j in (k - 1, k) if 0 <= j < down.size]
+        return int(min(near, key=lambda d: abs(d - frame)))
 
     def swing_bodies(self, frame: int) -> set:
         """The bodies of the feet that the reference has in the air at a frame."""
@@ -120,7 +137,8 @@ class FootPlacement:
                     out[side] = True
         return out
 
-    def adjust(self, data, frame: int, q_ref, gain: float | None = None) -> np.ndarray:
+    def adjust(self, data, frame: int, q_ref, gain: float | None = None,
+               clearance_m: float | None = None) -> np.ndarray:
         """Shift the swing hip's angles in ``q_ref`` (in place) for the current state.
 
         Parameters
@@ -133,6 +151,8 @@ class FootPlacement:
         q_ref : ndarray, shape (nq,)
         gain : float, optional
             This step's gain (default the placement's own).
+        clearance_m : float, optional
+            This step's swing clearance (default :data:`SWING_CLEARANCE_M`).
 
         Returns
         -------
@@ -151,8 +171,12 @@ class FootPlacement:
         vel = data.subtree_linvel[1]
         tc = self.time_constant_s
         sim_offset = (com[:2] - data.xpos[self.ankle[stance], :2]) + tc * vel[:2]
-        ref_offset = ((self.ref_com[frame, :2] - self.ref_ankle[frame, stance, :2])
-                      + tc * self.ref_com_vel[frame, :2])
+        # the reference's stance foot where the reference has it down, at the frame
+        # nearest this one (a foot the character put down early or lifted late is
+        # compared with where the reference lands it or last stood on it)
+        foot = self.ref_ankle[self._down_frame(frame, stance) if NEAREST_DOWN else frame,
+                              stance, :2]
+        ref_offset = (self.ref_com[frame, :2] - foot) + tc * self.ref_com_vel[frame, :2]
         shift = (self.gain if gain is None else gain) * (sim_offset - ref_offset)
         norm = float(np.linalg.norm(shift))
         if norm > MAX_SHIFT_M:
@@ -161,9 +185,13 @@ class FootPlacement:
         mujoco.mj_jac(self.model, data, self._jacp, None, data.xpos[self.ankle[swing]],
                       int(self.ankle[swing]))
         if SWING_HEIGHT:
-            # and the ankle at the reference's height above the floor (not lower: a swing
-            # foot that lands early lands on its toes, behind the body)
-            lift = max(0.0, self.ref_ankle[frame, swing, 2] - data.xpos[self.ankle[swing], 2])
+            # and the ankle at least at the reference's height above the floor (plus a
+            # clearance while the reference swings it: a toe that scrapes trips; not
+            # lower: a swing foot that lands early lands on its toes, behind the body)
+            lift = self.ref_ankle[frame, swing, 2] - data.xpos[self.ankle[swing], 2]
+            if not self.ref_down[frame, swing]:
+                lift += SWING_CLEARANCE_M if clearance_m is None else clearance_m
+            lift = max(0.0, lift)
             jac = self._jacp[:, dofs]
             q_ref[qadr] += np.linalg.lstsq(jac, np.append(shift, lift), rcond=1e-3)[0]
         else:

@@ -12,15 +12,19 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from eval.summaries import Summaries
 
 #: Metrics drawn on a log scale in :func:`plot_metric_chart` (slerp's jerk runs an order of
 #: magnitude above the rest where its Euler projection flips).
 LOG_SCALE = frozenset({"jerk_rms_deg_s3"})
 
 
-def plot_metric_chart(path: str | os.PathLike, statistics: dict, methods, windows,
+def plot_metric_chart(path: str | os.PathLike, statistics: Summaries, methods, windows,
                       metrics=None, title: str | None = None) -> None:
     """Every metric across the methods: the mean over pairs with its 95 % interval, one
     marker per window length, and the real windows' mean and interval as a dashed line
@@ -30,8 +34,8 @@ def plot_metric_chart(path: str | os.PathLike, statistics: dict, methods, window
     ----------
     path : path-like
         The PNG to write (atomically).
-    statistics : dict
-        :func:`eval.statistics.study_statistics`.
+    statistics : eval.summaries.Summaries
+        The study's (:func:`eval.summaries.summarise`).
     methods : sequence of str
     windows : sequence of int
     metrics : sequence of str, optional
@@ -60,14 +64,14 @@ def plot_metric_chart(path: str | os.PathLike, statistics: dict, methods, window
         scale, _, label = DISPLAY[metric]
         for k, frames in enumerate(windows):
             colour = window_colours[k % len(window_colours)]
-            rows_in = statistics["summary"][str(frames)]["all"]
-            mean = np.array([rows_in[m][metric]["mean"] for m in methods], dtype=float) * scale
-            lo = np.array([rows_in[m][metric]["lo"] for m in methods], dtype=float) * scale
-            hi = np.array([rows_in[m][metric]["hi"] for m in methods], dtype=float) * scale
+            ivs = [statistics.interval(frames, m, metric) for m in methods]
+            mean = np.array([iv["mean"] for iv in ivs], dtype=float) * scale
+            lo = np.array([iv["lo"] for iv in ivs], dtype=float) * scale
+            hi = np.array([iv["hi"] for iv in ivs], dtype=float) * scale
             offset = (k - (len(windows) - 1) / 2) * width
             ax.errorbar(x + offset, mean, yerr=[mean - lo, hi - mean], fmt="o", ms=4,
                         capsize=2, color=colour, label=f"L = {frames}")
-            real = rows_in["real"][metric]
+            real = statistics.interval(frames, "real", metric)
             if real["n"]:
                 ax.axhline(real["mean"] * scale, color=colour, ls="--", lw=1)
                 ax.axhspan(real["lo"] * scale, real["hi"] * scale, color=colour, alpha=0.08,

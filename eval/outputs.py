@@ -2,11 +2,15 @@
 
 Deterministic (byte-identical for the same seed, whatever the number of workers):
 
+- ``scores.csv``: every score, long-form (kind, id, window, method, metric, value: every
+  pair x window x method and every real window; :class:`eval.records.Records`);
 - ``results.json``: the protocol, every metric's definition and unit, every test clip,
-  every pair with every method's scores at every window, every real window, and all the
-  statistics;
+  every pair and real window (what they are; their scores are in scores.csv), and all the
+  statistics as long-form rows (:meth:`eval.summaries.Summaries.as_json`);
 - ``summary.csv`` (means and intervals), ``paired.csv`` (UPM - X), ``summary.md`` (the
   Markdown tables).
+
+Every CSV comes from the one writer :func:`eval.records.csv_text`.
 
 Not deterministic (timings vary by nature): ``timing.json`` and ``table4.md`` (the paper's
 Table 4 on this machine). Figures (PNG): ``fig13_window_dof.png``,
@@ -19,18 +23,26 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from eval.metrics import METRICS
 from eval.pairs import REAL_CONTEXT, SEGMENT_FRAMES, STUDY_FPS
 from eval.realdata import FLAT_FLOOR_MAX_BW
+from eval.records import COLUMNS, csv_text
 from eval.scoring import RESIDUAL_CONTEXT
 from eval.study import StudyResult, make_transition, pair_by_id
 from upm.fileio import atomic_open, atomic_write_text
 
+if TYPE_CHECKING:
+    from eval.summaries import Summaries
+
 RESULTS_FORMAT = "upm-controller/eval-results"
-RESULTS_VERSION = 1
+#: 2: scores in scores.csv (long-form), statistics as lists of rows, windows as ints.
+RESULTS_VERSION = 2
+#: The long-form table of every score.
+SCORES_NAME = "scores.csv"
 #: The window length the figures show when the study has it (the paper's).
 FIGURE_WINDOW = 20
 
@@ -71,18 +83,20 @@ def protocol(result: StudyResult) -> dict:
     }
 
 
-def results_document(result: StudyResult, statistics: dict) -> dict:
-    """``results.json``: every pair, every method, and the statistics."""
+def results_document(result: StudyResult, statistics: Summaries) -> dict:
+    """``results.json``: every pair and real window, where their scores are, and the
+    statistics (:class:`eval.summaries.Summaries`)."""
     return {
         "format": RESULTS_FORMAT,
         "format_version": RESULTS_VERSION,
         "protocol": protocol(result),
         "metrics": {name: spec.as_dict() for name, spec in METRICS.items()},
         "clips": result.clips,
-        "pairs": [{**p, "scores": {str(k): v for k, v in p["scores"].items()}}
-                  for p in result.pairs],
-        "real_windows": {str(k): v for k, v in result.real.items()},
-        "statistics": statistics,
+        "pairs": result.pairs,
+        "real_windows": [{"window": frames, **w} for frames, ws in result.real.items()
+                         for w in ws],
+        "scores": {"file": SCORES_NAME, "columns": list(COLUMNS), "rows": len(result.records)},
+        "statistics": statistics.as_json(),
     }
 
 
@@ -178,7 +192,7 @@ def choose_example(result: StudyResult, frames: int) -> Example:
                         "where they differ most in it")
 
 
-def write_figures(result: StudyResult, statistics: dict, out: Path) -> dict:
+def write_figures(result: StudyResult, statistics: Summaries, out: Path) -> dict:
     """The figures; returns ``{name: path}`` and the example's description."""
     from eval.figures import plot_metric_chart, write_filmstrip
     from upm.dof_plot import plot_sequence_dof, plot_window_dof
@@ -231,26 +245,26 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
     Returns
     -------
     dict
-        ``files``: name -> path; ``statistics``; ``timing``; ``figures`` (if drawn);
-        ``physics`` (its statistics, if run).
+        ``files``: name -> path; ``statistics`` (:class:`eval.summaries.Summaries`);
+        ``timing``; ``figures`` (if drawn); ``physics`` (its statistics, if run).
     """
     import shutil
     import tempfile
 
-    from eval.statistics import study_statistics
-    from eval.tables import paired_csv, summary_csv, summary_markdown, table4_markdown
+    from eval.summaries import PAIRED_COLUMNS, SUMMARY_COLUMNS, summarise
+    from eval.tables import summary_markdown, table4_markdown
 
     out = Path(out_dir)
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}-incomplete-", dir=out.parent))
     try:
         config = result.config
-        statistics = study_statistics(result.pairs, result.real, config.methods,
-                                      config.windows, config.seed)
+        statistics = summarise(result.records, METRICS, result.pairs, result.real,
+                               config.methods, config.windows, config.seed)
         document = results_document(result, statistics)
         markdown = summary_markdown(document, statistics)
-        names = ["results.json", "summary.csv", "paired.csv", "summary.md", "timing.json",
-                 "table4.md"]
+        names = ["results.json", SCORES_NAME, "summary.csv", "paired.csv", "summary.md",
+                 "timing.json", "table4.md"]
         report = {"statistics": statistics}
         if physics is not None:
             from eval.physics_report import physics_markdown, plot_physics
@@ -269,8 +283,11 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
                          newline="\n") as handle:
             json.dump(document, handle, indent=1)
             handle.write("\n")
-        atomic_write_text(stage / "summary.csv", summary_csv(statistics))
-        atomic_write_text(stage / "paired.csv", paired_csv(statistics))
+        atomic_write_text(stage / SCORES_NAME, result.records.to_csv())
+        atomic_write_text(stage / "summary.csv",
+                          csv_text(SUMMARY_COLUMNS, statistics.summary_rows()))
+        atomic_write_text(stage / "paired.csv",
+                          csv_text(PAIRED_COLUMNS, statistics.paired_rows()))
         atomic_write_text(stage / "summary.md", markdown)
         timing = timing_document(result)
         report["timing"] = timing
@@ -301,11 +318,12 @@ def physics_document(physics) -> dict:
             "controller": "controller.balance.follow: free root, no external force, "
                           "whole-body inverse dynamics with floor contacts in friction "
                           "pyramids and each joint's strength",
-            "real_windows": {str(k): len(v) for k, v in physics.real_windows.items()},
+            "real_windows": [{"window": k, "n": len(v)}
+                             for k, v in physics.real_windows.items()],
             "records": "physics.csv (kind, id, window, method, metric, value)",
         },
         "metrics": {name: {"unit": m.unit, "better": m.better,
                            "description": m.description}
                     for name, m in PHYSICS_METRICS.items()},
-        "statistics": physics.statistics,
+        "statistics": physics.statistics.as_json(),
     }

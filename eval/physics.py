@@ -25,11 +25,13 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from eval.records import REAL, Records
 from upm.errors import UpmError
+
+if TYPE_CHECKING:
+    from eval.summaries import Summaries
 
 #: Seconds of the motion simulated before and after the window.
 CONTEXT_S = 0.5
@@ -265,72 +267,34 @@ def records_of(units: list[Unit], done: dict[str, dict[str, float]]) -> Records:
 # --- statistics -----------------------------------------------------------------------------
 
 
-def physics_statistics(records: Records, pair_records: list[dict], real_flat: dict, methods,
-                       windows, seed: int, reference: str = "upm") -> dict:
-    """Intervals per method (and the real windows) and paired ``reference`` - X.
+def physics_statistics(records: Records, pair_records: list[dict], real_windows: dict,
+                       clips: dict, methods, windows, seed: int):
+    """Intervals per method (and the real windows) and paired UPM - X
+    (:func:`eval.summaries.summarise` with :data:`PHYSICS_METRICS`).
 
     Means and intervals are over the units where a figure exists (errors: the window
     frames before a fall; a unit that fell before its window has none): ``n`` says how
     many. Paired differences use the pairs where both methods have the figure.
-    ``real_flat``: per window length, whether each real window's clip has a flat floor
-    (:func:`real_flat_floor`).
+
+    Parameters
+    ----------
+    records : eval.records.Records
+    pair_records : list of dict
+        The study's pairs tested (:attr:`eval.study.StudyResult.pairs`).
+    real_windows : dict of int to list of eval.pairs.RealWindow
+    clips : dict
+        The study's clips (``flat_floor`` of each).
 
     Returns
     -------
-    dict
-        ``summary`` ``{L: {group: {method | "real": {metric: interval}}}}`` (groups
-        ``all`` and ``flat_floor``), ``paired`` ``{L: {X: {group: {metric:
-        comparison}}}}`` (every group of :func:`eval.statistics.pair_groups`; empty when
-        ``reference`` is not among the methods), ``reference``.
+    eval.summaries.Summaries
     """
-    from eval.statistics import bootstrap_mean, compare, pair_groups
+    from eval.summaries import summarise
 
-    ids = [p["id"] for p in pair_records]
-    groups, _ = pair_groups(pair_records)
-    out = {"reference": reference if reference in methods else None, "summary": {},
-           "paired": {}}
-    for frames in windows:
-        real_ids = records.ids("real", frames, REAL)
-        flat_real = real_flat.get(frames, {})
-        summary = {}
-        for group in ("all", "flat_floor"):
-            chosen = [i for i, keep in zip(ids, groups[group], strict=True) if keep]
-            rows = {}
-            for m in methods:
-                rows[m] = {}
-                for metric in PHYSICS_METRICS:
-                    v = records.values("pair", frames, m, metric, chosen)
-                    rows[m][metric] = bootstrap_mean(v[np.isfinite(v)], seed).as_dict()
-            real_chosen = real_ids if group == "all" else [
-                i for i in real_ids if flat_real.get(i, True)]
-            rows[REAL] = {}
-            for metric in PHYSICS_METRICS:
-                v = records.values("real", frames, REAL, metric, real_chosen)
-                rows[REAL][metric] = bootstrap_mean(v[np.isfinite(v)], seed).as_dict()
-            summary[group] = rows
-        out["summary"][str(frames)] = summary
-        if reference not in methods:
-            continue
-        paired = {}
-        for other in (m for m in methods if m != reference):
-            paired[other] = {}
-            for group, mask in groups.items():
-                chosen = [i for i, keep in zip(ids, mask, strict=True) if keep]
-                paired[other][group] = {}
-                for metric, spec in PHYSICS_METRICS.items():
-                    a = records.values("pair", frames, reference, metric, chosen)
-                    b = records.values("pair", frames, other, metric, chosen)
-                    both = np.isfinite(a) & np.isfinite(b)
-                    paired[other][group][metric] = compare(a[both], b[both], spec.better,
-                                                           seed).as_dict()
-        out["paired"][str(frames)] = paired
-    return out
-
-
-def real_flat_floor(real_windows: dict, clips: dict) -> dict[int, dict[int, bool]]:
-    """Per window length, whether each real window's clip has a flat floor."""
-    return {frames: {w.index: bool(clips[w.clip]["flat_floor"]) for w in ws}
+    real = {frames: [{"id": w.index, "clip": w.clip,
+                      "flat_floor": bool(clips[w.clip]["flat_floor"])} for w in ws]
             for frames, ws in real_windows.items()}
+    return summarise(records, PHYSICS_METRICS, pair_records, real, methods, windows, seed)
 
 
 # --- the run --------------------------------------------------------------------------------
@@ -348,7 +312,7 @@ class PhysicsResult:
     ----------
     records : eval.records.Records
         Long-form: every unit's :data:`PHYSICS_METRICS`.
-    statistics : dict
+    statistics : eval.summaries.Summaries
         :func:`physics_statistics`.
     pairs : int
         Pairs tested (the study's first ones).
@@ -363,7 +327,7 @@ class PhysicsResult:
     """
 
     records: Records
-    statistics: dict
+    statistics: Summaries
     pairs: int
     real_windows: dict
     checkpoint: Checkpoint
@@ -447,9 +411,8 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
             f"{first.describe()}: {error}); the {len(checkpoint.done)} finished are kept in "
             f"{checkpoint.path}: run the same command again to complete the rest")
     records = records_of(units, checkpoint.done)
-    statistics = physics_statistics(records, result.pairs[:n_pairs],
-                                    real_flat_floor(real_windows, result.clips),
-                                    config.methods, config.windows, config.seed)
+    statistics = physics_statistics(records, result.pairs[:n_pairs], real_windows,
+                                    result.clips, config.methods, config.windows, config.seed)
     return PhysicsResult(records=records, statistics=statistics, pairs=n_pairs,
                          real_windows=real_windows, checkpoint=checkpoint, resumed=resumed,
                          executor=executor, workers=workers, wall_s=wall)

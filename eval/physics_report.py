@@ -1,11 +1,16 @@
-"""The free-root test's tables and figure (from :func:`eval.physics.physics_statistics`)."""
+"""The free-root test's tables and figure (from :func:`eval.physics.physics_statistics`:
+an :class:`eval.summaries.Summaries`)."""
 
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 from eval.physics import CONTEXT_S, PERCENT, PHYSICS_METRICS
 from eval.records import REAL
+
+if TYPE_CHECKING:
+    from eval.summaries import Summaries
 
 #: The columns of the Markdown and terminal tables.
 TABLE_METRICS = ("fell", "joint_error_deg_rms", "body_error_mm_mean", "root_drift_m",
@@ -34,14 +39,14 @@ def label(metric: str) -> str:
     return PHYSICS_METRICS[metric].label
 
 
-def method_rows(statistics: dict, frames: int, methods, group: str = "all") -> list[list[str]]:
+def method_rows(statistics: Summaries, frames: int, methods, group: str = "all") -> list[list[str]]:
     """Per method (then the real windows): the :data:`TABLE_METRICS` cells."""
-    rows_in = statistics["summary"][str(frames)][group]
     rows = []
     for name in [*methods, REAL]:
         shown = "real windows (calibration)" if name == REAL else name
-        n = rows_in[name]["fell"]["n"]
-        rows.append([f"{shown} (n={n})"] + [cell(m, rows_in[name][m]) for m in TABLE_METRICS])
+        n = statistics.interval(frames, name, "fell", group)["n"]
+        rows.append([f"{shown} (n={n})"] + [cell(m, statistics.interval(frames, name, m, group))
+                                            for m in TABLE_METRICS])
     return rows
 
 
@@ -52,9 +57,9 @@ def _table(header, rows) -> str:
     return "\n".join(lines)
 
 
-def physics_markdown(statistics: dict, methods, windows, n_pairs: int) -> str:
+def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int) -> str:
     """The free-root section of summary.md."""
-    reference = statistics.get("reference")
+    reference = statistics.reference
     parts = [
         "## Can the character perform it? The free-root test",
         "",
@@ -69,13 +74,13 @@ def physics_markdown(statistics: dict, methods, windows, n_pairs: int) -> str:
         parts += ["", f"### Window of {frames} frames", "",
                   _table(["method"] + [label(m) for m in TABLE_METRICS],
                          method_rows(statistics, frames, methods))]
-        paired = statistics["paired"].get(str(frames))
-        if paired:
+        others = statistics.compared(frames)
+        if others:
             rows = []
-            for other, groups in paired.items():
+            for other in others:
                 row = [f"{reference} - {other}"]
                 for metric in TABLE_METRICS:
-                    c = groups["all"][metric]
+                    c = statistics.comparison(frames, other, metric)
                     iv = {"mean_diff": c["mean_diff"], "lo": c["lo"], "hi": c["hi"],
                           "n": c["n"]}
                     row.append(f"{cell(metric, iv, signed=True)} "
@@ -87,7 +92,7 @@ def physics_markdown(statistics: dict, methods, windows, n_pairs: int) -> str:
     return "\n".join(parts) + "\n"
 
 
-def physics_text(statistics: dict, frames: int, methods) -> str:
+def physics_text(statistics: Summaries, frames: int, methods) -> str:
     """The free-root headline for the terminal."""
     header = ["method"] + [label(m) for m in TABLE_METRICS]
     cells = method_rows(statistics, frames, methods)
@@ -97,7 +102,7 @@ def physics_text(statistics: dict, frames: int, methods) -> str:
     return "\n".join(lines)
 
 
-def plot_physics(path: str | os.PathLike, statistics: dict, frames: int, methods) -> None:
+def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, methods) -> None:
     """Fall rate and joint error per method beside the real windows (bars with 95 %
     intervals)."""
     import matplotlib
@@ -105,7 +110,6 @@ def plot_physics(path: str | os.PathLike, statistics: dict, frames: int, methods
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = statistics["summary"][str(frames)]["all"]
     names = [*methods, REAL]
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
     for ax, metric in zip(axes, ("fell", "joint_error_deg_rms", "body_error_mm_mean"),
@@ -113,7 +117,7 @@ def plot_physics(path: str | os.PathLike, statistics: dict, frames: int, methods
         scale = 100.0 if metric in PERCENT else 1.0
         means, los, his = [], [], []
         for name in names:
-            iv = rows[name][metric]
+            iv = statistics.interval(frames, name, metric)
             m = iv["mean"] if iv["mean"] is not None else float("nan")
             means.append(m * scale)
             los.append((m - (iv["lo"] if iv["lo"] is not None else m)) * scale)

@@ -16,6 +16,8 @@ the clips' subjects were seen in training and by whether the floor is flat.
   (terciles of the A-B distance, deg RMS over the declared DOFs); ``seen`` (both clips'
   subjects have clips in the train split) / ``unseen``; ``flat_floor`` (both clips
   flat-floor, :mod:`eval.realdata`) / ``uneven_floor``.
+
+:mod:`eval.summaries` applies them to a study's long-form table.
 """
 
 from __future__ import annotations
@@ -23,8 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from eval.metrics import METRICS
 
 #: Bootstrap resamples per interval.
 RESAMPLES = 2000
@@ -53,10 +53,12 @@ class Interval:
     n: int
 
     def as_dict(self) -> dict:
-        return {"mean": _r(self.mean), "lo": _r(self.lo), "hi": _r(self.hi), "n": self.n}
+        return {"mean": round6(self.mean), "lo": round6(self.lo), "hi": round6(self.hi),
+                "n": self.n}
 
 
-def _r(x: float):
+def round6(x: float):
+    """``x`` rounded to 6 decimals, None when it is not finite (JSON has no NaN)."""
     return None if not np.isfinite(x) else round(float(x), 6)
 
 
@@ -142,89 +144,6 @@ def pair_groups(pairs: list[dict]) -> tuple[dict[str, np.ndarray], list[float]]:
     groups = {"all": np.ones(ab.size, dtype=bool), "ab_near": tercile == 0,
               "ab_middle": tercile == 1, "ab_far": tercile == 2, "seen": seen,
               "unseen": ~seen, "flat_floor": flat, "uneven_floor": ~flat}
-    return groups, [_r(e) for e in edges]
+    return groups, [round6(e) for e in edges]
 
 
-def _end_counts(pairs: list[dict]) -> dict:
-    """Pairs whose end postures A / B / either are themselves in self-collision."""
-    ends = np.array([p.get("end_self_collision") or [False, False] for p in pairs],
-                    dtype=bool).reshape(-1, 2)
-    return {"A": int(ends[:, 0].sum()), "B": int(ends[:, 1].sum()),
-            "either": int(ends.any(axis=1).sum())}
-
-
-def _values(records, frames, method, metric) -> np.ndarray:
-    if method is None:
-        return np.array([r["scores"][metric] for r in records], dtype=float)
-    return np.array([r["scores"][frames][method][metric] for r in records], dtype=float)
-
-
-def study_statistics(pairs: list[dict], real: dict[int, list[dict]], methods, windows,
-                     seed: int) -> dict:
-    """Every interval and comparison of the study, JSON-ready.
-
-    Parameters
-    ----------
-    pairs : list of dict
-        Pair records sorted by id (:class:`eval.study.StudyResult`).
-    real : dict of int to list of dict
-        Real-window records per window length.
-    methods : sequence of str
-    windows : sequence of int
-    seed : int
-
-    Returns
-    -------
-    dict
-        ``bootstrap`` (settings), ``groups`` (pairs per group, tercile edges),
-        ``summary`` ``{L: {group: {method | "real": {metric: interval}}}}`` for the groups
-        ``all`` and ``flat_floor`` (real windows: of flat-floor clips),
-        ``calibration_by_clip`` ``{L: {clip: {metric: mean}, n}}`` and ``paired``
-        ``{L: {X: {group: {metric: comparison}}}}`` for UPM - X, every X.
-    """
-    groups, edges = pair_groups(pairs)
-    out = {
-        "bootstrap": {"resamples": RESAMPLES, "confidence": CONFIDENCE,
-                      "interval": "percentile", "unit": "pair (or real window)",
-                      "seed": seed,
-                      "tie": "equal values as stored (6 decimals)"},
-        "groups": {"pairs": {g: int(mask.sum()) for g, mask in groups.items()},
-                   "ab_tercile_edges_deg": edges,
-                   "end_self_collision": _end_counts(pairs)},
-        "summary": {}, "calibration_by_clip": {}, "paired": {},
-    }
-    for frames in windows:
-        key = str(frames)
-        reals = real.get(frames, [])
-        real_flat = [r for r in reals if r["flat_floor"]]
-        summary = {}
-        for group in ("all", "flat_floor"):
-            chosen = [p for p, keep in zip(pairs, groups[group], strict=True) if keep]
-            rows = {m: {metric: bootstrap_mean(_values(chosen, frames, m, metric),
-                                               seed).as_dict() for metric in METRICS}
-                    for m in methods}
-            real_rows = reals if group == "all" else real_flat
-            rows["real"] = {metric: bootstrap_mean(_values(real_rows, frames, None, metric),
-                                                   seed).as_dict() for metric in METRICS}
-            summary[group] = rows
-        out["summary"][key] = summary
-        by_clip = {}
-        for clip in sorted({r["clip"] for r in reals}):
-            mine = [r for r in reals if r["clip"] == clip]
-            by_clip[clip] = {"n": len(mine), **{metric: _r(_values(mine, frames, None,
-                                                                    metric).mean())
-                                                for metric in METRICS}}
-        out["calibration_by_clip"][key] = by_clip
-        if "upm" in methods:
-            paired = {}
-            for other in (m for m in methods if m != "upm"):
-                paired[other] = {}
-                for group, mask in groups.items():
-                    chosen = [p for p, keep in zip(pairs, mask, strict=True) if keep]
-                    paired[other][group] = {
-                        metric: compare(_values(chosen, frames, "upm", metric),
-                                        _values(chosen, frames, other, metric),
-                                        spec.better, seed).as_dict()
-                        for metric, spec in METRICS.items()}
-            out["paired"][key] = paired
-    return out

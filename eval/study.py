@@ -5,8 +5,10 @@ the humanoid, and the real windows that calibrate the scores (SPEC section 7).
 fits the two ablations (``classnn``, ``snap``) on the same postures, draws the pairs
 (:mod:`eval.pairs`), and scores every method x window of every pair and every real window
 (:func:`eval.scoring.score_window`), in parallel over pairs through an executor
-(:mod:`eval.executor`: a local process pool, or Ray). The scores do not depend on the number of
-workers: each task is a pure function of its pair, and the results are sorted by id.
+(:mod:`eval.executor`: a local process pool, or Ray). The scores go into one long-form
+table (:class:`eval.records.Records`: pair or real window, window length, method, metric,
+value) with the metric registry :data:`eval.metrics.METRICS`. They do not depend on the
+number of workers: each task is a pure function of its pair, and the table sorts its rows.
 BLAS runs single-threaded in every process (the arrays are small; with several threads
 the spacetime optimisation ran up to 30x slower on a loaded machine).
 """
@@ -17,8 +19,6 @@ import os
 import time
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from eval.metrics import METRICS, pose_distance_rms_deg
 from eval.pairs import (
     Pair,
@@ -28,6 +28,7 @@ from eval.pairs import (
     exclusion_zones,
     real_exclusion_zone,
 )
+from eval.records import REAL, Records
 from upm.transitions import METHODS
 
 #: Transition methods of the study, in table order: every registered method.
@@ -163,22 +164,23 @@ def score_pair(data: StudyData, pair: Pair) -> dict:
     Returns
     -------
     dict
-        ``index``; ``scores``: ``{L: {method: {metric: value}}}``; ``ms``: ``{L: {method:
-        milliseconds of the transition itself}}``; ``end_self_collision``: whether A and
-        B (clip 2's first posture on clip 1's body) are in self-collision.
+        ``index``; ``scores``: list of (L, method, ``{metric: value}``); ``ms``: ``{L:
+        {method: milliseconds of the transition itself}}``; ``end_self_collision``:
+        whether A and B (clip 2's first posture on clip 1's body) are in self-collision.
     """
     from eval.scoring import end_self_collision, score_window
 
-    scores: dict = {}
+    scores: list = []
     ms: dict = {}
     ends = None
     for frames in data.config.windows:
         zones = exclusion_zones(pair, frames, data.lengths)
-        scores[frames], ms[frames] = {}, {}
+        ms[frames] = {}
         for method in data.config.methods:
             t = make_transition(data, pair, method, frames)
             model = data.model(pair.first.clip)
-            scores[frames][method] = score_window(model, t.motion, t.window, data.real, zones)
+            scores.append((frames, method,
+                           score_window(model, t.motion, t.window, data.real, zones)))
             ms[frames][method] = 1000.0 * t.seconds
             if ends is None:
                 ends = end_self_collision(model, t.motion, t.window)
@@ -243,15 +245,17 @@ class StudyResult:
     Attributes
     ----------
     config : StudyConfig
+    records : eval.records.Records
+        Every score, long-form: ``pair`` rows (id, L, method, metric, value) and ``real``
+        rows (id, L, ``"real"``, metric, value), metrics from :data:`eval.metrics.METRICS`.
     pairs : list of dict
         Per pair (sorted by id): ``id``, ``first``/``second`` segments, ``subjects``,
         ``ab_distance_deg`` (A to B, RMS over the declared DOFs), ``seen`` (both
         subjects have clips in the train split), ``end_self_collision`` ([A, B] in
-        self-collision on clip 1's body), ``flat_floor`` (both clips flat-floor),
-        ``scores`` ``{L: {method: {metric: value}}}``.
+        self-collision on clip 1's body), ``flat_floor`` (both clips flat-floor).
     real : dict of int to list of dict
         Per window length, the real windows: ``id``, ``clip``, ``start``, ``stop``,
-        ``flat_floor``, ``scores``.
+        ``flat_floor``.
     clips : dict of str to dict
         Per test clip: ``subject``, ``frames`` (120 fps), ``seen``,
         ``floor_residual_median_bw``, ``flat_floor``.
@@ -265,6 +269,7 @@ class StudyResult:
     """
 
     config: StudyConfig
+    records: Records
     pairs: list
     real: dict
     clips: dict
@@ -350,23 +355,24 @@ def run_study(config: StudyConfig, workers: int | None = None,
                     "floor_residual_median_bw": floor[name],
                     "flat_floor": floor[name] < FLAT_FLOOR_MAX_BW}
              for name in data.motions}
+    records = Records(METRICS)
+    for kind, outcome in done:
+        if kind == "pair":
+            for frames, method, values in outcome["scores"]:
+                records.add("pair", outcome["index"], frames, method, values)
+        else:
+            records.add(REAL, outcome["index"], outcome["frames"], REAL, outcome["scores"])
     by_pair = {r["index"]: r for kind, r in done if kind == "pair"}
     pair_records = [_pair_record(data, p, by_pair[p.index], clips) for p in pairs]
     timing = {frames: {m: [by_pair[p.index]["ms"][frames][m] for p in pairs]
                        for m in config.methods} for frames in config.windows}
-    real_scores = {(r["frames"], r["index"]): r["scores"] for kind, r in done if kind == "real"}
     real_records = {frames: [{"id": w.index, "clip": w.clip, "start": w.start, "stop": w.stop,
-                              "flat_floor": clips[w.clip]["flat_floor"],
-                              "scores": _ordered(real_scores[(frames, w.index)])}
-                             for w in ws]
+                              "flat_floor": clips[w.clip]["flat_floor"]} for w in ws]
                     for frames, ws in real.items()}
-    return StudyResult(config=config, pairs=pair_records, real=real_records, clips=clips,
-                       train_subjects=sorted(data.train_subjects), timing_ms=timing,
-                       wall_s=time.perf_counter() - start, workers=workers, data=data)
-
-
-def _ordered(scores: dict) -> dict:
-    return {name: scores[name] for name in METRICS}
+    return StudyResult(config=config, records=records, pairs=pair_records, real=real_records,
+                       clips=clips, train_subjects=sorted(data.train_subjects),
+                       timing_ms=timing, wall_s=time.perf_counter() - start, workers=workers,
+                       data=data)
 
 
 def _pair_record(data: StudyData, pair: Pair, outcome: dict, clips: dict) -> dict:
@@ -384,9 +390,6 @@ def _pair_record(data: StudyData, pair: Pair, outcome: dict, clips: dict) -> dic
         "end_self_collision": outcome["end_self_collision"],
         "flat_floor": clips[pair.first.clip]["flat_floor"] and clips[pair.second.clip][
             "flat_floor"],
-        "scores": {frames: {m: _ordered(outcome["scores"][frames][m])
-                            for m in data.config.methods}
-                   for frames in data.config.windows},
     }
 
 
@@ -398,10 +401,3 @@ def pair_by_id(result: StudyResult, index: int) -> Pair:
     return Pair(index=record["id"], first=Segment(**record["first"]),
                 second=Segment(**record["second"]))
 
-
-def metric_matrix(records: list[dict], frames: int, method: str | None,
-                  metric: str) -> np.ndarray:
-    """One metric over records (pairs, or real windows with ``method=None``), (N,)."""
-    if method is None:
-        return np.array([r["scores"][metric] for r in records], dtype=float)
-    return np.array([r["scores"][frames][method][metric] for r in records], dtype=float)

@@ -1,20 +1,25 @@
-"""Tables of the study: ``summary.csv`` and ``paired.csv`` (every interval and comparison,
-one per row), ``summary.md`` (the Markdown tables) and ``table4.md`` (the paper's
-Table 4: milliseconds per transition and the spacetime / UPM ratio).
+"""Tables of the study: ``summary.md`` (the Markdown tables), the terminal headline and
+``table4.md`` (the paper's Table 4: milliseconds per transition and the spacetime / UPM
+ratio). The CSVs are the long-form tables themselves (:mod:`eval.summaries`,
+:func:`eval.records.csv_text`).
 
-Everything but Table 4 is a pure function of the statistics, so it is byte-identical for
-the same seed; Table 4 comes from the run's timings and varies from run to run.
+Every table but Table 4 reads the study's :class:`eval.summaries.Summaries` (one lookup
+per cell, a misspelt metric refused by name), so it is byte-identical for the same seed;
+Table 4 comes from the run's timings and varies from run to run.
 """
 
 from __future__ import annotations
 
-import csv
-import io
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from eval.metrics import HEADLINE, METRICS
+from eval.records import REAL
 from eval.statistics import GROUPS
+
+if TYPE_CHECKING:
+    from eval.summaries import Summaries
 
 #: How each metric is shown in Markdown: (scale, decimals, header).
 DISPLAY: dict[str, tuple[float, int, str]] = {
@@ -46,15 +51,15 @@ GROUP_NAMES = {
 }
 
 
-def best_baseline(statistics: dict, frames: int, methods) -> str | None:
+def best_baseline(statistics: Summaries, frames: int, methods) -> str | None:
     """The baseline with the highest mean valid-frame share at window ``frames`` (ties:
     the lower mean nearest-real distance), among :data:`BASELINES` that were run."""
-    rows = statistics["summary"][str(frames)]["all"]
     candidates = [m for m in BASELINES if m in methods]
     if not candidates:
         return None
-    return min(candidates, key=lambda m: (-rows[m]["valid_pct"]["mean"],
-                                          rows[m]["nearest_real_mean_deg"]["mean"]))
+    return min(candidates, key=lambda m: (
+        -statistics.interval(frames, m, "valid_pct")["mean"],
+        statistics.interval(frames, m, "nearest_real_mean_deg")["mean"]))
 
 
 def _num(metric: str, value, signed: bool = False) -> str:
@@ -73,44 +78,6 @@ def cell(metric: str, interval: dict, signed: bool = False) -> str:
             f"[{_num(metric, interval['lo'], signed)}, {_num(metric, interval['hi'], signed)}]")
 
 
-def summary_csv(statistics: dict) -> str:
-    """One row per window x group x method x metric: mean and interval."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["window_frames", "group", "method", "metric", "unit", "better", "mean",
-                     "ci_low", "ci_high", "n"])
-    for frames, groups in statistics["summary"].items():
-        for group, rows in groups.items():
-            for method, metrics in rows.items():
-                for metric, iv in metrics.items():
-                    spec = METRICS[metric]
-                    writer.writerow([frames, group, method, metric, spec.unit, spec.better,
-                                     _csv(iv["mean"]), _csv(iv["lo"]), _csv(iv["hi"]),
-                                     iv["n"]])
-    return out.getvalue()
-
-
-def paired_csv(statistics: dict) -> str:
-    """One row per window x compared method x group x metric: UPM - X."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["window_frames", "upm_minus", "group", "metric", "unit", "better",
-                     "mean_diff", "ci_low", "ci_high", "n", "upm_wins", "ties", "upm_losses"])
-    for frames, others in statistics["paired"].items():
-        for other, groups in others.items():
-            for group, metrics in groups.items():
-                for metric, c in metrics.items():
-                    spec = METRICS[metric]
-                    writer.writerow([frames, other, group, metric, spec.unit, spec.better,
-                                     _csv(c["mean_diff"]), _csv(c["lo"]), _csv(c["hi"]),
-                                     c["n"], c["wins"], c["ties"], c["losses"]])
-    return out.getvalue()
-
-
-def _csv(value) -> str:
-    return "" if value is None else repr(float(value))
-
-
 def _table(header: list[str], rows: list[list[str]], align: list[str] | None = None) -> str:
     align = align or ["l"] + ["r"] * (len(header) - 1)
     rule = ["---:" if a == "r" else "---" for a in align]
@@ -119,25 +86,27 @@ def _table(header: list[str], rows: list[list[str]], align: list[str] | None = N
     return "\n".join(lines)
 
 
-def method_table(statistics: dict, frames: int, methods, metrics, group: str = "all",
+def method_table(statistics: Summaries, frames: int, methods, metrics, group: str = "all",
                  real_label: str = "real windows (calibration)") -> str:
     """Methods (and the real windows) x metrics: ``mean [95 % interval]``."""
-    rows_in = statistics["summary"][str(frames)][group]
     header = ["method"] + [DISPLAY[m][2] for m in metrics]
-    rows = [[name] + [cell(m, rows_in[name][m]) for m in metrics] for name in methods]
-    rows.append([real_label] + [cell(m, rows_in["real"][m]) for m in metrics])
+    rows = [[label] + [cell(m, statistics.interval(frames, name, m, group)) for m in metrics]
+            for name, label in [*((n, n) for n in methods), (REAL, real_label)]]
     return _table(header, rows)
 
 
-def paired_table(statistics: dict, frames: int, other: str, group: str = "all") -> str:
+def _difference(c: dict) -> dict:
+    return {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"], "n": c["n"]}
+
+
+def paired_table(statistics: Summaries, frames: int, other: str, group: str = "all") -> str:
     """UPM - X per metric: mean difference [interval], wins / ties / losses."""
-    comps = statistics["paired"][str(frames)][other][group]
     rows = []
-    for metric, c in comps.items():
+    for metric in METRICS:
+        c = statistics.comparison(frames, other, metric, group)
         better = "higher" if METRICS[metric].better == "higher" else "lower"
         rows.append([DISPLAY[metric][2], better,
-                     cell(metric, {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"],
-                                   "n": c["n"]}, signed=True),
+                     cell(metric, _difference(c), signed=True),
                      f"{c['wins']} / {c['ties']} / {c['losses']}", verdict(c, metric)])
     return _table(["metric", "better", f"UPM - {other}", "UPM wins / ties / loses", "verdict"],
                   rows, ["l", "l", "r", "r", "l"])
@@ -159,60 +128,52 @@ def verdict(comparison: dict, metric: str) -> str:
     return "no difference shown"
 
 
-def group_table(statistics: dict, frames: int, other: str, metrics) -> str:
+def _with_counts(metric: str, c: dict) -> str:
+    return f"{cell(metric, _difference(c), signed=True)} ({c['wins']}/{c['ties']}/{c['losses']})"
+
+
+def group_table(statistics: Summaries, frames: int, other: str, metrics) -> str:
     """UPM - X on some metrics in every group: ``diff [interval] (W/T/L)``."""
-    paired = statistics["paired"][str(frames)][other]
-    counts = statistics["groups"]["pairs"]
+    counts = statistics.groups["pairs"]
     rows = []
     for group in GROUPS:
         row = [f"{GROUP_NAMES[group]} (n={counts[group]})"]
         for metric in metrics:
-            c = paired[group][metric]
-            if c["n"] == 0:
-                row.append("-")
-                continue
-            iv = {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"], "n": c["n"]}
-            row.append(f"{cell(metric, iv, signed=True)} ({c['wins']}/{c['ties']}/{c['losses']})")
+            c = statistics.comparison(frames, other, metric, group)
+            row.append("-" if c["n"] == 0 else _with_counts(metric, c))
         rows.append(row)
     return _table(["pairs"] + [DISPLAY[m][2] for m in metrics], rows)
 
 
-def versus_table(statistics: dict, frames: int, others, metrics) -> str:
+def versus_table(statistics: Summaries, frames: int, others, metrics) -> str:
     """UPM - X for several X on some metrics: ``diff [interval] (W/T/L)``."""
-    paired = statistics["paired"][str(frames)]
-    rows = []
-    for other in others:
-        row = [f"UPM - {other}"]
-        for metric in metrics:
-            c = paired[other]["all"][metric]
-            iv = {"mean": c["mean_diff"], "lo": c["lo"], "hi": c["hi"], "n": c["n"]}
-            row.append(f"{cell(metric, iv, signed=True)} ({c['wins']}/{c['ties']}/{c['losses']})")
-        rows.append(row)
+    rows = [[f"UPM - {other}"] + [_with_counts(m, statistics.comparison(frames, other, m))
+                                  for m in metrics] for other in others]
     return _table(["comparison"] + [DISPLAY[m][2] for m in metrics], rows)
 
 
-def calibration_table(statistics: dict, frames: int, clips: dict) -> str:
+def calibration_table(statistics: Summaries, frames: int, clips: dict) -> str:
     """Real windows per test clip: the mean of each headline metric."""
-    by_clip = statistics["calibration_by_clip"][str(frames)]
     rows = []
-    for clip, values in by_clip.items():
+    for clip in statistics.clips(frames):
         info = clips.get(clip, {})
-        rows.append([clip, str(values["n"]), "yes" if info.get("flat_floor") else "no",
+        rows.append([clip, str(statistics.clip_windows[(frames, clip)]),
+                     "yes" if info.get("flat_floor") else "no",
                      "yes" if info.get("seen") else "no"]
-                    + [_num(m, values[m]) for m in HEADLINE])
+                    + [_num(m, statistics.clip_mean(frames, clip, m)) for m in HEADLINE])
     return _table(["clip", "windows", "flat floor", "subject seen"]
                   + [DISPLAY[m][2] for m in HEADLINE], rows)
 
 
-def summary_markdown(result_meta: dict, statistics: dict) -> str:
+def summary_markdown(result_meta: dict, statistics: Summaries) -> str:
     """The study's tables as Markdown.
 
     Parameters
     ----------
     result_meta : dict
         ``protocol`` (from results.json) and ``clips``.
-    statistics : dict
-        :func:`eval.statistics.study_statistics`.
+    statistics : eval.summaries.Summaries
+        The study's (:func:`eval.summaries.summarise`).
     """
     protocol = result_meta["protocol"]
     clips = result_meta["clips"]
@@ -227,11 +188,11 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
         f"{protocol['fps']:g} fps, windows of {', '.join(map(str, protocol['windows']))} "
         f"frames, seed {protocol['seed']}; maps trained on the train split. Every cell is "
         f"the mean over pairs with its 95 % percentile bootstrap interval "
-        f"({statistics['bootstrap']['resamples']} resamples). The calibration row scores "
+        f"({statistics.settings['resamples']} resamples). The calibration row scores "
         f"real windows of the test clips exactly as a transition's window. Units and "
         f"definitions: results.json (`metrics`).",
     ]
-    ends = statistics["groups"]["end_self_collision"]
+    ends = statistics.groups["end_self_collision"]
     parts += [
         "",
         "Reading these tables:",
@@ -278,7 +239,7 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
             "### Residual force on flat-floor pairs only",
             "",
             f"Pairs whose two clips are flat-floor (n = "
-            f"{statistics['groups']['pairs']['flat_floor']}); real windows of flat-floor clips.",
+            f"{statistics.groups['pairs']['flat_floor']}); real windows of flat-floor clips.",
             "",
             method_table(statistics, frames, methods,
                          ["residual_force_mean_bw", "residual_force_peak_bw"],
@@ -296,7 +257,7 @@ def summary_markdown(result_meta: dict, statistics: dict) -> str:
                 "",
                 "### UPM - linear by group (difference [interval] (UPM wins/ties/losses))",
                 "",
-                f"A-B distance terciles cut at {statistics['groups']['ab_tercile_edges_deg']} "
+                f"A-B distance terciles cut at {statistics.groups['ab_tercile_edges_deg']} "
                 "deg RMS.",
                 "",
                 group_table(statistics, frames, "linear", HEADLINE),
@@ -371,25 +332,24 @@ def table4_markdown(timing: dict) -> str:
     ])
 
 
-def headline_rows(statistics: dict, timing: dict, frames: int, methods) -> list[dict]:
+def headline_rows(statistics: Summaries, timing: dict, frames: int, methods) -> list[dict]:
     """The headline for one window: feasible, UPM, linear, the best other baseline and
     the real windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
-    rows = statistics["summary"][str(frames)]["all"]
     best = best_baseline(statistics, frames, methods)
     names = [m for m in ("feasible", "upm", "linear") if m in methods] + (
         [best] if best else [])
     out = []
-    for name in names + ["real"]:
-        entry = {"method": name if name != "real" else "real windows"}
+    for name in names + [REAL]:
+        entry = {"method": name if name != REAL else "real windows"}
         for metric in HEADLINE:
-            entry[metric] = rows[name][metric]
-        ms = timing["ms"][str(frames)].get(name) if name != "real" else None
+            entry[metric] = statistics.interval(frames, name, metric)
+        ms = timing["ms"][str(frames)].get(name) if name != REAL else None
         entry["ms_median"] = ms["median"] if ms else None
         out.append(entry)
     return out
 
 
-def headline_text(statistics: dict, timing: dict, frames: int, methods) -> str:
+def headline_text(statistics: Summaries, timing: dict, frames: int, methods) -> str:
     """The headline as a plain-text table for the terminal."""
     rows = headline_rows(statistics, timing, frames, methods)
     header = ["method"] + [DISPLAY[m][2] for m in HEADLINE] + ["ms"]

@@ -46,6 +46,8 @@ def test_clips_table(data_dir, capsys):
     assert main(["clips", "--data", str(data_dir), "--split", "test"]) == 0
     out = capsys.readouterr().out
     assert "02_01" in out and "02_02" not in out and "7 clips" in out
+    if (data_dir.parent / "bvh").is_dir():  # BVH files beside the clips are listed too
+        assert "bvh/mocapbank_test.bvh" in out and "12 BVH files" in out
 
 
 @pytest.mark.parametrize("args, message", [

@@ -48,9 +48,13 @@ def test_every_method_and_the_real_windows_have_finite_physics_figures(local_run
     assert records.values("real", 20, "real", "fell").min() == 0.0
     errors = records.values("real", 20, "real", "joint_error_deg_rms")
     assert 0.0 < min(e for e in errors if math.isfinite(e)) < 10.0
-    summary = local_run.statistics["summary"]["20"]["all"]
-    assert set(summary) == {*STUDY_METHODS, "real"}
-    assert set(local_run.statistics["paired"]["20"]) == set(STUDY_METHODS) - {"upm"}
+    statistics = local_run.statistics
+    assert {(w, m) for (w, g, m, k) in statistics.summary} == {
+        (20, m) for m in [*STUDY_METHODS, "real"]}
+    assert set(statistics.compared(20)) == set(STUDY_METHODS) - {"upm"}
+    assert {x for (w, x, g, k) in statistics.paired} == set(statistics.compared(20))
+    back = Records.from_csv(records.to_csv(), PHYSICS_METRICS, "physics.csv")
+    assert back == records
 
 
 def test_ray_gives_the_same_records_as_the_local_pool(study, local_run, tmp_path):
@@ -109,7 +113,7 @@ def test_the_long_form_table_refuses_a_misspelt_metric():
     with pytest.raises(KeyError, match="fel"):
         records.values("pair", 20, "upm", "fel")
     assert records.to_csv().splitlines() == ["kind,id,window,method,metric,value",
-                                             "pair,0,20,upm,fell,1"]
+                                             "pair,0,20,upm,fell,1.0"]
 
 
 @pytest.mark.parametrize("methods, note", [(["linear", "slerp"], "No paired tables"),
@@ -121,7 +125,7 @@ def test_every_methods_subset_writes_a_complete_output(data_dir, tmp_path, metho
     assert main(["eval", "--data", str(data_dir), "--pairs", "2", "--windows", "10",
                  "--methods", *methods, "--no-figures", "--out", str(out)]) == 0
     names = {p.name for p in out.iterdir()}
-    assert names == {"results.json", "summary.csv", "paired.csv", "summary.md",
+    assert names == {"results.json", "scores.csv", "summary.csv", "paired.csv", "summary.md",
                      "timing.json", "table4.md"}
     assert note in (out / "summary.md").read_text()
 

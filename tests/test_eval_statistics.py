@@ -5,13 +5,14 @@ import numpy as np
 import pytest
 
 from eval.metrics import METRICS
+from eval.records import REAL, Records
 from eval.statistics import (
     bootstrap_mean,
     compare,
     pair_groups,
     resample_indices,
-    study_statistics,
 )
+from eval.summaries import summarise
 
 
 def test_interval_contains_the_mean_and_is_reproducible():
@@ -58,20 +59,21 @@ def test_paired_wins_follow_the_metric_direction():
     assert higher.difference.mean == pytest.approx(3.75)
 
 
-def _records(n: int) -> list[dict]:
+def _pairs(n: int, records: Records | None = None) -> list[dict]:
     rng = np.random.default_rng(2)
-    records = []
+    pairs = []
     for i in range(n):
-        scores = {20: {m: {k: float(rng.normal(1.0 if m == "upm" else 2.0, 0.1))
-                           for k in METRICS} for m in ("upm", "linear")}}
-        records.append({"id": i, "ab_distance_deg": float(i), "seen": i % 3 == 0,
-                        "flat_floor": i % 2 == 0, "end_self_collision": [False, i == 1],
-                        "scores": scores})
-    return records
+        if records is not None:
+            for m in ("upm", "linear"):
+                records.add("pair", i, 20, m, {k: float(rng.normal(1.0 if m == "upm" else 2.0,
+                                                                   0.1)) for k in METRICS})
+        pairs.append({"id": i, "ab_distance_deg": float(i), "seen": i % 3 == 0,
+                      "flat_floor": i % 2 == 0, "end_self_collision": [False, i == 1]})
+    return pairs
 
 
 def test_groups_partition_the_pairs():
-    groups, edges = pair_groups(_records(30))
+    groups, edges = pair_groups(_pairs(30))
     for a, b in (("seen", "unseen"), ("flat_floor", "uneven_floor")):
         assert not (groups[a] & groups[b]).any() and (groups[a] | groups[b]).all()
     terciles = groups["ab_near"].astype(int) + groups["ab_middle"] + groups["ab_far"]
@@ -81,18 +83,42 @@ def test_groups_partition_the_pairs():
 
 
 def test_study_statistics_has_every_method_metric_and_comparison():
-    pairs = _records(12)
-    real = {20: [{"id": i, "clip": "02_01" if i % 2 else "16_15", "flat_floor": True,
-                  "scores": {k: 1.5 for k in METRICS}} for i in range(6)]}
-    stats = study_statistics(pairs, real, ("upm", "linear"), (20,), seed=0)
-    rows = stats["summary"]["20"]["all"]
-    assert set(rows) == {"upm", "linear", "real"}
-    assert all(set(rows[m]) == set(METRICS) for m in rows)
-    assert rows["real"]["valid_pct"] == {"mean": 1.5, "lo": 1.5, "hi": 1.5, "n": 6}
-    paired = stats["paired"]["20"]["linear"]["all"]
+    records = Records(METRICS)
+    pairs = _pairs(12, records)
+    real = {20: [{"id": i, "clip": "02_01" if i % 2 else "16_15", "flat_floor": True}
+                 for i in range(6)]}
+    for w in real[20]:
+        records.add(REAL, w["id"], 20, REAL, {k: 1.5 for k in METRICS})
+    stats = summarise(records, METRICS, pairs, real, ("upm", "linear"), (20,), seed=0)
+    assert {(m, k) for (w, g, m, k) in stats.summary if g == "all"} == {
+        (m, k) for m in ("upm", "linear", REAL) for k in METRICS}
+    assert stats.interval(20, REAL, "valid_pct") == {"mean": 1.5, "lo": 1.5, "hi": 1.5, "n": 6}
     # UPM's values are lower everywhere: it wins the lower-is-better metrics.
-    assert paired["jerk_rms_deg_s3"]["wins"] == 12
-    assert paired["valid_pct"]["losses"] == 12
-    assert paired["valid_pct"]["hi"] < 0
-    assert stats["groups"]["end_self_collision"] == {"A": 0, "B": 1, "either": 1}
-    assert set(stats["calibration_by_clip"]["20"]) == {"02_01", "16_15"}
+    assert stats.comparison(20, "linear", "jerk_rms_deg_s3")["wins"] == 12
+    assert stats.comparison(20, "linear", "valid_pct")["losses"] == 12
+    assert stats.comparison(20, "linear", "valid_pct")["hi"] < 0
+    assert stats.groups["end_self_collision"] == {"A": 0, "B": 1, "either": 1}
+    assert stats.clips(20) == ["02_01", "16_15"]
+    assert stats.clip_mean(20, "16_15", "valid_pct") == 1.5
+    assert stats.compared(20) == ["linear"] and stats.compared(10) == []
+    with pytest.raises(KeyError, match="'valid_pc'"):
+        stats.interval(20, "upm", "valid_pc")
+    with pytest.raises(KeyError, match="'jerk_rms'"):
+        stats.comparison(20, "linear", "jerk_rms")
+
+
+def test_missing_figures_are_left_out_of_means_and_pairs():
+    """A NaN (a figure that does not exist for that unit) is left out: the mean of the
+    rest, and the pairs where both methods have it."""
+    records = Records(METRICS)
+    pairs = _pairs(4)
+    for i, (u, x) in enumerate([(1.0, 2.0), (np.nan, 5.0), (3.0, np.nan), (2.0, 2.0)]):
+        records.add("pair", i, 20, "upm", {"jerk_rms_deg_s3": u})
+        records.add("pair", i, 20, "linear", {"jerk_rms_deg_s3": x})
+    stats = summarise(records, {"jerk_rms_deg_s3": METRICS["jerk_rms_deg_s3"]}, pairs, {},
+                      ("upm", "linear"), (20,), seed=0)
+    assert stats.interval(20, "upm", "jerk_rms_deg_s3")["mean"] == 2.0
+    assert stats.interval(20, "upm", "jerk_rms_deg_s3")["n"] == 3
+    c = stats.comparison(20, "linear", "jerk_rms_deg_s3")
+    assert (c["n"], c["wins"], c["ties"], c["losses"]) == (2, 1, 1, 0)
+    assert stats.interval(20, REAL, "jerk_rms_deg_s3")["n"] == 0

@@ -1,17 +1,19 @@
 """``upm eval`` end to end on a small study (3 pairs, 10-frame windows, every method): the
-files, every method x metric for every pair, the calibration row, the figures; the same
-seed gives byte-identical results with 2 worker processes and with none; bad arguments
-are one-line errors."""
+files, every method x metric for every pair in the long-form scores.csv (read back with
+int windows), the calibration row, the figures; the same seed gives byte-identical results
+with 2 worker processes and with none; bad arguments are one-line errors."""
 
 import json
 
+import numpy as np
 import pytest
 
 from eval.metrics import HEADLINE, METRICS
+from eval.records import REAL, Records
 from eval.study import STUDY_METHODS
 from upm.cli import main
 
-DETERMINISTIC = ("results.json", "summary.csv", "paired.csv", "summary.md")
+DETERMINISTIC = ("results.json", "scores.csv", "summary.csv", "paired.csv", "summary.md")
 
 
 def _run(data_dir, out, *extra):
@@ -43,19 +45,30 @@ def test_same_seed_same_bytes_whatever_the_workers(study):
         assert (study / "one" / name).read_bytes() == (study / "two" / name).read_bytes(), name
 
 
+def _scores(folder) -> Records:
+    return Records.from_csv((folder / "scores.csv").read_text(), METRICS, "scores.csv")
+
+
 def test_results_hold_every_pair_method_and_metric(study):
     results = json.loads((study / "two" / "results.json").read_text())
     assert results["format"] == "upm-controller/eval-results"
+    assert results["format_version"] == 2
     assert set(results["metrics"]) == set(METRICS)
     assert all(results["metrics"][m]["unit"] for m in METRICS)
     assert [p["id"] for p in results["pairs"]] == [0, 1, 2]
     for pair in results["pairs"]:
         assert pair["first"]["clip"] != pair["second"]["clip"]
         assert pair["first"]["stop"] - pair["first"]["start"] in (173, 200)
-        scores = pair["scores"]["10"]
-        assert list(scores) == list(STUDY_METHODS)
-        for method in STUDY_METHODS:
-            assert list(scores[method]) == list(METRICS)
+    scores = _scores(study / "two")
+    per_unit = len(METRICS)
+    assert len(scores) == results["scores"]["rows"] == (3 * len(STUDY_METHODS) + 3) * per_unit
+    assert {row[2] for row in scores.rows()} == {10}  # the window read back as an int
+    for method in STUDY_METHODS:
+        assert scores.ids("pair", 10, method) == [0, 1, 2]
+        for metric in METRICS:
+            assert np.isfinite(scores.values("pair", 10, method, metric)).all(), (method,
+                                                                                  metric)
+    assert scores.to_csv() == (study / "two" / "scores.csv").read_text()
     protocol = results["protocol"]
     assert protocol["pairs"] == 3 and protocol["windows"] == [10] and protocol["seed"] == 7
     assert set(protocol["train_subjects"]) >= {"02", "05", "83", "141"}
@@ -66,22 +79,26 @@ def test_results_hold_every_pair_method_and_metric(study):
 
 def test_calibration_row_exists(study):
     results = json.loads((study / "two" / "results.json").read_text())
-    real = results["real_windows"]["10"]
-    assert len(real) == 3
-    assert all(list(r["scores"]) == list(METRICS) for r in real)
-    summary = results["statistics"]["summary"]["10"]["all"]
-    assert set(summary) == set(STUDY_METHODS) | {"real"}
-    assert summary["real"]["nearest_real_mean_deg"]["n"] == 3
+    real = [w for w in results["real_windows"] if w["window"] == 10]
+    assert [w["id"] for w in real] == [0, 1, 2]
+    assert _scores(study / "two").ids(REAL, 10, REAL) == [0, 1, 2]
+    summary = [row for row in results["statistics"]["summary"]
+               if row["window"] == 10 and row["group"] == "all"]
+    assert {row["method"] for row in summary} == set(STUDY_METHODS) | {REAL}
+    assert len(summary) == (len(STUDY_METHODS) + 1) * len(METRICS)
+    assert next(row["n"] for row in summary if row["method"] == REAL
+                and row["metric"] == "nearest_real_mean_deg") == 3
     table = (study / "two" / "summary.md").read_text()
     assert "real windows (calibration)" in table and "UPM - linear" in table
 
 
 def test_paired_comparisons_and_groups(study):
     results = json.loads((study / "two" / "results.json").read_text())
-    paired = results["statistics"]["paired"]["10"]
-    assert set(paired) == set(STUDY_METHODS) - {"upm"}
+    paired = [row for row in results["statistics"]["paired"] if row["window"] == 10]
+    assert {row["other"] for row in paired} == set(STUDY_METHODS) - {"upm"}
     for metric in HEADLINE:
-        c = paired["linear"]["all"][metric]
+        c = next(row for row in paired if row["other"] == "linear" and row["group"] == "all"
+                 and row["metric"] == metric)
         assert c["wins"] + c["ties"] + c["losses"] == 3
     groups = results["statistics"]["groups"]["pairs"]
     assert groups["all"] == 3

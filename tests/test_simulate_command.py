@@ -141,11 +141,13 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert free["controller"] == "balance"
     assert ("free root (balance): " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
                                         else "does not fall")) in printed
-    # through the window and most of the second walk it stays up (measured: it walks the
-    # window, then falls at 1.4 s, 0.5 s into 02_02)
+    # it walks through the window and the second walk (measured: no fall; the search ran
+    # one segment after the window in another mode, at 10.3 deg RMS in the window; without
+    # the search it fell at 1.4 s, 0.5 s into 02_02)
     (window,) = report["windows"]
+    assert not free["fell"]
     assert not window["tracking"]["free"]["fell"]
-    assert window["tracking"]["free"]["error_deg_rms"] < 8.0
+    assert window["tracking"]["free"]["error_deg_rms"] < 12.0
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
     for key in ("error_deg_rms", "body_error_mm_mean", "root_drift_m", "com_height_error_m",
                 "contact_force_peak_bw", "torque_peak_nm", "torque_saturation_share",
@@ -169,7 +171,8 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
                                  "com_height_error_m", "contact_force_n", "torque_nm",
                                  "torque_saturated", "limit_rows", "self_contacts",
                                  "warnings", "external_force_peak", "weight_n", "wall_s",
-                                 "sim_s", "raw_step_s")})
+                                 "sim_s", "raw_step_s", "segment_modes", "retries",
+                                 "simulated_steps")})
     replayed = replay(model, run)
     # the AMC holds what the character did: the replay of its torques, to the AMC's
     # printed precision

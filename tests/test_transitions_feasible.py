@@ -1,6 +1,7 @@
 """``feasible``: every window frame inside the allowed range (the study's rule), C1 joins,
 a key posture the humanoid takes without a new self-collision, on real pairs; where the
-UPM key breaks a limit, feasible does not; ``upm`` stays free of MuJoCo."""
+UPM key breaks a limit, feasible does not; the window check counts what the study counts
+and keeps the better window; ``upm`` stays free of MuJoCo."""
 
 import dataclasses
 import subprocess
@@ -9,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+import upm.transitions.feasible as feasible_module
 from controller.kinematic_check import HumanoidChecker
 from controller.validity import added_excess, check_motion, limit_excess
 from tests.transition_data import (
@@ -85,6 +87,50 @@ def test_the_checker_agrees_with_the_study(data_dir):
     found = HumanoidChecker(motion.skeleton).self_collision_pairs(frames.posture_deg)
     assert any(expected) and not all(expected)
     assert found == expected
+
+
+def test_the_checker_finds_the_studys_floor_penetration(data_dir):
+    """With the root, HumanoidChecker's floor check is the study's on a clip that goes
+    below the floor on some frames (a run)."""
+    from humanoid_xml import catalog_model_path, load_model
+
+    catalog = catalog_of(data_dir)
+    motion = catalog.load("02_03")
+    study = check_motion(load_model(catalog_model_path(catalog, "02_03")), motion)
+    colliding, floor = HumanoidChecker(motion.skeleton).frame_checks(
+        motion.posture_deg, motion.root, names=False)
+    assert study.floor_penetration.any() and not study.floor_penetration.all()
+    np.testing.assert_array_equal(floor, study.floor_penetration)
+    np.testing.assert_array_equal(colliding, study.self_collision)
+
+
+def _study_invalid_frames(data_dir, result) -> int:
+    """Window frames the study finds in self-collision or below the floor."""
+    from humanoid_xml import catalog_model_path, load_model
+
+    model = load_model(catalog_model_path(catalog_of(data_dir), "02_01"))
+    frames = result.motion.frames(result.a_index, result.b_index + 1)
+    validity = check_motion(model, frames, (slice(1, result.frames + 1),))
+    return int((validity.self_collision | validity.floor_penetration)[1:-1].sum())
+
+
+def test_the_window_check_counts_what_the_study_counts_and_keeps_the_better_window(
+        data_dir, monkeypatch):
+    """02_01@200 -> 02_03@20: the window of the map's nearest collision-free key has frames
+    below the floor (the shared root runs low there); the alpha-point key's window has
+    fewer, and feasible keeps it."""
+    before, after = pair(data_dir, 0)
+    feasible = sources(data_dir)["feasible"]
+    chosen = transition("feasible", before, after, 20, 0.5, feasible)
+    monkeypatch.setattr(feasible_module, "WINDOW_TRIES", 1)
+    nearest = transition("feasible", before, after, 20, 0.5, feasible)
+    for result in (chosen, nearest):
+        assert result.diagnostics["floor_checked"] == 1.0
+        assert result.diagnostics["window_invalid_frames"] == _study_invalid_frames(
+            data_dir, result)
+    assert chosen.diagnostics["key_candidate"] == 1.0
+    assert _study_invalid_frames(data_dir, chosen) < _study_invalid_frames(data_dir, nearest)
+    assert _added_excess_deg(chosen).max() <= 1e-6
 
 
 def test_where_the_upm_key_breaks_a_limit_feasible_does_not(data_dir):

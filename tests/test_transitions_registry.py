@@ -72,11 +72,12 @@ def test_registered_method_runs_in_the_study(registered, data_dir):
     config = StudyConfig(data_dir=str(data_dir), pairs=1, windows=(10,), seed=3,
                          methods=("linear", NAME))
     result = run_study(config, workers=1, show_progress=False)
-    scores = result.pairs[0]["scores"][10]
-    assert set(scores) == {"linear", NAME}
+    scores = result.records
+    assert scores.ids("pair", 10, NAME) == scores.ids("pair", 10, "linear") == [0]
     # The same blend as linear, so the same scores: the study ran the registered method.
-    assert scores[NAME]["valid_pct"] == scores["linear"]["valid_pct"]
-    assert np.isfinite(scores[NAME]["jerk_rms_deg_s3"])
+    assert scores.values("pair", 10, NAME, "valid_pct") == scores.values(
+        "pair", 10, "linear", "valid_pct")
+    assert np.isfinite(scores.values("pair", 10, NAME, "jerk_rms_deg_s3")).all()
 
 
 def test_names_are_unique_and_builders_required():
@@ -92,3 +93,27 @@ def test_names_are_unique_and_builders_required():
 def test_a_map_method_without_map_says_so(catalog):
     with pytest.raises(UsageError, match="needs --map MAP.npz"):
         build_key_source("feasible", KeySourceContext(catalog=catalog))
+
+
+def test_a_method_sees_the_windows_root(catalog):
+    """``transition`` hands every method the shared root of its window (a method may check
+    its frames against the floor with it): the root the joined motion gets."""
+    from upm.transitions import transition
+
+    seen = []
+
+    def solve(problem):
+        seen.append(problem.root_window)
+        return _solve(problem)
+
+    name = "test-root"
+    register(TransitionMethod(name=name, solve=solve, continuity="C0", key_kind=NAME,
+                              summary="test method", key_source=_build))
+    try:
+        before = catalog.load("02_01").frames(100, 140)
+        after = catalog.load("02_03").frames(20, 60)
+        result = transition(name, before, after, 10, 0.5, _AlphaPoint(catalog))
+    finally:
+        unregister(name)
+    assert seen[0].shape == (10, 6)
+    np.testing.assert_array_equal(seen[0], result.window_root)

@@ -11,9 +11,9 @@ rotation ``M``), identity for the bones the project does not articulate (so thei
 values are not carried). The root adds ``Xposition Yposition Zposition`` first.
 
 Reading such a file back onto the same ASF (:func:`motion_from_bvh`) inverts that
-exactly: ``M = C^T L C`` decomposed in the AMC's ``x``-first order. Other skeletons
-(CMU conversions by other tools, DAZ, Mixamo) need a retarget onto the ASF, which this
-module does not do.
+exactly: ``M = C^T L C`` decomposed in the AMC's ``x``-first order. Other skeletons go
+through :mod:`upm.bvh.retarget` (the CMU 31-joint naming) or
+:mod:`upm.bvh.world_retarget` (any figure, with a joint map).
 """
 
 from __future__ import annotations
@@ -100,8 +100,8 @@ def motion_from_bvh(bvh: BvhMotion, skeleton, fps: float | None = None, name: st
         raise DataFileError(bvh.source, f"its joints are not the bones of "
                                         f"{skeleton.source or skeleton.name} (e.g. no "
                                         f"{(missing or ['same order'])[0]!r}): only a BVH "
-                                        "written on that ASF converts back; retargeting "
-                                        "other skeletons is not supported")
+                                        "written on that ASF converts back (other figures: "
+                                        "upm convert retargets them)")
     sk = bvh.skeleton
     if any(c != _ROTATION for c in sk.channels[1:]) or sk.channels[0] != _ROOT:
         raise DataFileError(bvh.source, "expected Zrotation Yrotation Xrotation channels on "

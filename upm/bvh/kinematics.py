@@ -45,6 +45,22 @@ def joint_positions(bvh) -> tuple[np.ndarray, np.ndarray]:
     end_sites : ndarray, shape (T, J, 3)
         The end site of each joint that has one, NaN elsewhere.
     """
+    _, pos, ends = world_transforms(bvh)
+    return pos, ends
+
+
+def world_transforms(bvh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """World rotation and position of every joint, and its end site.
+
+    Returns
+    -------
+    rotations : ndarray, shape (T, J, 3, 3)
+        Each joint's world rotation (identity everywhere in the rest pose).
+    joints : ndarray, shape (T, J, 3)
+        File units.
+    end_sites : ndarray, shape (T, J, 3)
+        NaN for joints without an end site.
+    """
     skeleton = bvh.skeleton
     n, nj = bvh.n_frames, skeleton.n_joints
     local = local_rotations(bvh)
@@ -65,4 +81,15 @@ def joint_positions(bvh) -> tuple[np.ndarray, np.ndarray]:
             pos[:, j] = pos[:, p] + np.einsum("tij,tj->ti", world[:, p], t)
         if np.isfinite(skeleton.end_sites[j]).all():
             ends[:, j] = pos[:, j] + world[:, j] @ skeleton.end_sites[j]
-    return pos, ends
+    return world, pos, ends
+
+
+def rest_positions(skeleton) -> tuple[np.ndarray, np.ndarray]:
+    """Joint and end-site positions with every rotation zero and the root at its
+    ``OFFSET``: ``(J, 3)`` each (end sites NaN where absent), file units."""
+    nj = skeleton.n_joints
+    pos = np.zeros((nj, 3))
+    for j in range(nj):
+        p = skeleton.parents[j]
+        pos[j] = skeleton.offsets[j] + (pos[p] if p >= 0 else 0.0)
+    return pos, pos + skeleton.end_sites

@@ -9,8 +9,9 @@ and the root position is the ``Hips`` translation in the BVH's length unit, foun
 ratio of the BVH's bone offsets to the ASF's bone lengths. Bone lengths may differ from the
 ASF's (02_01.bvh is on subject 01's lengths): only rotations are carried.
 
-Skeletons with other rest poses and bone splits (DAZ-style, Mixamo) need a world-direction
-retarget, which is not implemented: they are refused with the joints that are missing.
+Skeletons with other rest poses and bone splits (DAZ-style, Mixamo, ...) go through the
+world-direction retarget of :mod:`upm.bvh.world_retarget` instead; this module refuses
+them naming the joints that are missing.
 """
 
 from __future__ import annotations

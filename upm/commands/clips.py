@@ -5,6 +5,13 @@ Real motion capture leaves its ASF limits: over every declared DOF (the column
 'out%'), 3-14 % of the CMU samples here lie outside them after wrapping to [-180, 180);
 'pose_out%' counts only the 45 declared DOFs of the 21-joint posture. This is the first
 calibration figure of the project: a transition method can only be judged against it.
+
+BVH files found in the data directory or a ``bvh`` directory beside it are listed after
+the clips: frames, the file's frame rate, joints, which reading ``upm convert`` applies
+(``upm``: written by upm on ASF bones; ``cmu31``: the CMU 31-joint naming; ``daz43``,
+``mixamo``, ``body19``: a built-in joint map; ``unmapped``: needs ``--map``), whether
+frame 0 is an added rest pose, and the clip the file is named after with that clip's
+rate (which ``upm convert`` uses).
 """
 
 from __future__ import annotations
@@ -45,13 +52,27 @@ def clip_rows(catalog, names) -> list[dict]:
     return rows
 
 
+def bvh_rows(catalog) -> list[dict]:
+    """One row per BVH file of the data directory (:mod:`upm.bvh.listing`)."""
+    from upm.bvh.listing import bvh_files, bvh_row
+
+    names = catalog.names()
+    rows = []
+    for path in bvh_files(catalog.root):
+        row = bvh_row(path, names, catalog.root)
+        row["clip_fps"] = catalog.info(row["clip"]).fps if row["clip"] else None
+        rows.append(row)
+    return rows
+
+
 def run(args) -> int:
     from upm.catalog import Catalog
 
     catalog = Catalog(args.data)
     rows = clip_rows(catalog, catalog.names(args.split))
+    bvh = bvh_rows(catalog)
     if args.json:
-        print_json({"data": str(catalog.root), "clips": rows})
+        print_json({"data": str(catalog.root), "clips": rows, "bvh": bvh})
         return 0
     for row in rows:
         row["description"] = row["description"][:44]
@@ -63,4 +84,20 @@ def run(args) -> int:
     ]))
     total = sum(r["frames"] for r in rows)
     print(f"\n{len(rows)} clips, {total} frames, from {catalog.root}")
+    if bvh:
+        for row in bvh:
+            row["rest"] = "frame 0" if row["rest_frame"] else "-"
+            row["clip_fps"] = "-" if row["clip_fps"] is None else format(row["clip_fps"], "g")
+            row["clip"] = row["clip"] or "-"
+            row["problem"] = row["problem"][:60]
+        print()
+        columns = [
+            ("file", "bvh file", "<"), ("frames", "frames", ">d"), ("fps", "fps", ">g"),
+            ("joints", "joints", ">d"), ("figure", "figure", "<"), ("rest", "rest pose", "<"),
+            ("clip", "clip", "<"), ("clip_fps", "clip fps", ">"),
+        ]
+        if any(row["problem"] for row in bvh):
+            columns.append(("problem", "problem", "<"))
+        print(format_table(bvh, columns))
+        print(f"\n{len(bvh)} BVH files")
     return 0

@@ -24,7 +24,8 @@ walk, the step-up and the 60 fps jumps need about one body weight in the real da
 alone). Tracking: the humanoid's servos (human torque limits) follow each window with the
 root driven along it.
 
-The output directory gets results.json (every pair, every method), summary.csv, paired.csv,
+The output directory gets scores.csv (every score, long-form: kind, id, window, method,
+metric, value), results.json (protocol, pairs, statistics), summary.csv, paired.csv,
 summary.md (means with 95 % bootstrap intervals, UPM - X paired, by A-B distance
 tercile, by seen/unseen subject, flat floor), table4.md + timing.json (ms per transition,
 spacetime / UPM: these vary by run, the rest is identical for the same seed) and the
@@ -186,14 +187,14 @@ def run(args) -> int:
     print(f"Held-out study: {pairs} pairs, window {frames} frames at 120 fps "
           f"(mean [95 % interval]; {result.workers} workers, {result.wall_s:.0f} s)")
     print(headline_text(report["statistics"], report["timing"], frames, methods))
-    paired = report["statistics"]["paired"].get(str(frames), {}).get("linear")
-    if paired:
+    statistics = report["statistics"]
+    if "linear" in statistics.compared(frames):
         from eval.metrics import HEADLINE
         from eval.tables import DISPLAY, verdict
 
         print("UPM - linear, paired (UPM wins/ties/losses):")
         for metric in HEADLINE:
-            c = paired["all"][metric]
+            c = statistics.comparison(frames, "linear", metric)
             print(f"  {DISPLAY[metric][2]:<26} {verdict(c, metric):<20} "
                   f"{c['wins']}/{c['ties']}/{c['losses']}")
     ratio = report["timing"]["spacetime_over_upm"].get(str(frames))
@@ -207,7 +208,7 @@ def run(args) -> int:
               f"{physics.wall_s:.0f} s" + (f", {physics.resumed} runs resumed" if
                                            physics.resumed else "") + "):")
         print(physics_text(physics.statistics, frames, methods))
-    print(f"written to {out}/: results.json, summary.csv, paired.csv, summary.md, "
+    print(f"written to {out}/: results.json, scores.csv, summary.csv, paired.csv, summary.md, "
           f"timing.json, table4.md" + (", physics.csv" if physics is not None else "")
           + (", figures (*.png)" if args.figures else ""))
     return 0

@@ -51,6 +51,11 @@ class WindowProblem:
     skeleton : Skeleton
         The skeleton of the joined motion (clip 1's).
     key_source : KeyPostureSource or None
+    root_window : ndarray, shape (L, 6), or None
+        The root every method's window gets (the shared root blend,
+        :func:`upm.transitions.root.blend_root`): tx, ty, tz metres, rx, ry, rz degrees
+        in the skeleton's root axis order; None when the caller did not compute it. A
+        method that checks its frames against the floor needs it.
     """
 
     before_deg: np.ndarray
@@ -59,6 +64,7 @@ class WindowProblem:
     alpha: float
     skeleton: Skeleton
     key_source: KeyPostureSource | None = None
+    root_window: np.ndarray | None = None
 
     @property
     def a_deg(self) -> np.ndarray:

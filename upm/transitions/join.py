@@ -76,15 +76,18 @@ def match_clip(reference: Motion, motion: Motion) -> tuple[Motion, dict[str, flo
 
 
 def make_problem(before: Motion, after: Motion, frames: int, alpha: float,
-                 key_source=None, context: int = SPLINE_CONTEXT) -> WindowProblem:
+                 key_source=None, context: int = SPLINE_CONTEXT,
+                 root_window=None) -> WindowProblem:
     """The window problem: up to ``context`` frames of each clip, unwrapped along time,
-    clip 2's shifted by whole turns per DOF so that B is within 180 degrees of A."""
+    clip 2's shifted by whole turns per DOF so that B is within 180 degrees of A;
+    ``root_window`` (L, 6), the window's shared root, when known."""
     k1, k2 = min(context, before.n_frames), min(context, after.n_frames)
     before_deg = unwrap_deg(before.posture_deg[-k1:])
     after_deg = unwrap_deg(after.posture_deg[:k2])
     after_deg = after_deg + 360.0 * np.round((before_deg[-1] - after_deg[0]) / 360.0)
     return WindowProblem(before_deg=before_deg, after_deg=after_deg, frames=frames,
-                         alpha=alpha, skeleton=before.skeleton, key_source=key_source)
+                         alpha=alpha, skeleton=before.skeleton, key_source=key_source,
+                         root_window=root_window)
 
 
 def _extra_window(before: Motion, after: Motion, frames: int) -> np.ndarray | None:
@@ -150,12 +153,14 @@ def transition(method: str, before: Motion, after: Motion, frames: int = 20,
     after, info = match_clip(before, after)
 
     start = time.perf_counter()
-    problem = make_problem(before, after, frames, alpha, key_source, context)
+    # The root first: it does not depend on the window's angles, and a method may check
+    # its frames against the floor with it.
+    root = blend_root(before.root, after.root, frames, alpha, before.skeleton.root_axis_order,
+                      align_heading=align_heading, context=context)
+    problem = make_problem(before, after, frames, alpha, key_source, context, root.window)
     result = spec.solve(problem)
     window_posture = wrap_deg(result.posture_deg)
     window_posture[:, ~before.skeleton.declared] = 0.0
-    root = blend_root(before.root, after.root, frames, alpha, before.skeleton.root_axis_order,
-                      align_heading=align_heading, context=context)
     seconds = time.perf_counter() - start
 
     n1, n2 = before.n_frames, after.n_frames

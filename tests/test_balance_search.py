@@ -1,0 +1,112 @@
+"""The balance controller's pieces that need no long simulation: marker dropouts filled
+on the real clip 16_15 (and nothing touched on a clean clip), the reference put on the
+floor, and the backtracking search's bookkeeping (which segment is run again in which
+mode, within its reach and budget)."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from controller import balance, to_qpos
+from controller.dropouts import fill_dropouts
+from controller.qpos import joint_layout
+
+
+def test_16_15_left_arm_dropout_filled(catalog):
+    motion = catalog.load("16_15")
+    from humanoid_xml import build_mjcf
+
+    model = mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("16")))
+    qpos = to_qpos(model, motion)
+    filled, count = fill_dropouts(model, qpos)
+    layout = joint_layout(model)
+    arm = [a for n, a in zip(layout.names, layout.qpos_address, strict=True)
+           if n.startswith("lhumerus.")]
+    # the raw clip: the left arm at exactly zero for 2 frames, then 76 degrees away
+    assert np.all(qpos[:2, arm] == 0.0)
+    assert np.abs(np.rad2deg(qpos[2, arm])).max() > 70
+    # filled: held at the first frame after the dropout; nothing else changes
+    assert count >= 2
+    np.testing.assert_allclose(filled[:3, arm], np.repeat(qpos[2:3, arm], 3, axis=0), atol=1e-12)
+    others = np.ones(model.nq, dtype=bool)
+    for n, a in zip(layout.names, layout.qpos_address, strict=True):
+        if n.split(".")[0] in {"lhumerus", "lradius", "lwrist", "lhand", "lfingers",
+                               "lthumb", "lclavicle"}:
+            others[a] = False
+    np.testing.assert_array_equal(filled[:, others], qpos[:, others])
+
+
+def test_clean_clip_untouched(model02, walk):
+    qpos = to_qpos(model02, walk)
+    filled, count = fill_dropouts(model02, qpos)
+    assert count == 0
+    np.testing.assert_array_equal(filled, qpos)
+
+
+@pytest.fixture
+def search(model02):
+    sim = balance.torque_model(model02)
+    data = mujoco.MjData(sim)
+    fps, every = 120.0, int(round(balance.SEGMENT_S * 120.0))
+    n_frames = 20 * every
+    ref_pelvis = np.full(n_frames, 1.0)
+    s = balance._Search(sim, n_frames, fps, 5, ref_pelvis, 1)
+    return s, data, every
+
+
+def _run_to(search, data, t):
+    for frame in range(search.restart, t + 1):
+        data.time = frame  # marks the state each segment was saved in
+        search.enter(data, frame)
+
+
+def test_search_retries_then_backtracks(search):
+    s, data, every = search
+    modes = len(balance.MODES)
+    t = 2 * every + 5  # in segment 2
+    _run_to(s, data, t)
+    # the segment in trouble runs again in each next mode, from its saved start
+    for mode in range(1, modes):
+        assert s.retry(data, t, steps=0) == 2 * every + 1
+        assert s.mode(t) == mode
+        assert data.time == 2 * every + 1
+        _run_to(s, data, t)
+    # no modes left there: the segment before it; segment 2 starts over in its mode,
+    # and the segments after keep it for STICKY_S, then go back to the default
+    assert s.retry(data, t, steps=0) == every + 1
+    assert s.mode(every + 1) == 1 and s.mode(t) == 1
+    last_sticky = 1 + s.sticky
+    assert s.modes()[:last_sticky + 2].tolist() == [0] + [1] * s.sticky + [1, 0]
+    assert s.retries == modes
+
+
+def test_search_gives_up_out_of_reach_or_budget(search):
+    s, data, every = search
+    t = 2 * every + 5
+    _run_to(s, data, t)
+    assert s.retry(data, t, steps=int(s.budget_steps)) is None
+    assert not s.in_trouble(data, t + 1)  # quiet from then on
+    assert s.modes().tolist() == [0] * len(s.modes())
+
+
+def test_02_01_grounded(model02, walk):
+    """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
+    it; grounded, they touch it (within the low-pass's smoothing)."""
+    from controller.balance import floor_clearance
+    from controller.grounding import GROUND_DEPTH_M, ground_reference
+    from controller.placement import FootPlacement
+
+    qpos = to_qpos(model02, walk)
+    data = mujoco.MjData(model02)
+    qpos[:, 2] -= floor_clearance(model02, data, qpos[0])
+    down = FootPlacement(model02, qpos, walk.fps).ref_down
+    standing = np.flatnonzero(down.any(axis=1))[::4]
+    before = np.array([floor_clearance(model02, data, qpos[t]) for t in standing])
+    grounded, shift = ground_reference(model02, qpos, walk.fps, down)
+    after = np.array([floor_clearance(model02, data, grounded[t]) for t in standing])
+    assert before.max() > 0.04
+    assert np.median(np.abs(after + GROUND_DEPTH_M)) < 0.005
+    assert np.abs(after).max() < 0.02
+    # only the root's height moves, and smoothly (no step above 1 mm per frame)
+    np.testing.assert_array_equal(np.delete(grounded, 2, axis=1), np.delete(qpos, 2, axis=1))
+    assert np.abs(np.diff(shift)).max() < 0.001
