@@ -79,6 +79,14 @@ class Studio:
         self.scene: Scene | None = None
         self.ghost: Scene | None = None
         self.last_update_s = float("nan")
+        # The Fig. 13 image (about 0.1 s of matplotlib) is drawn by a thread of its own
+        # from the latest transition, so that a dragged slider moves the humanoid at the
+        # scene's pace and the image catches up with the last position.
+        self._curve_job = None
+        self._drawing = False
+        self._stopped = False
+        self._curve_ready = threading.Condition()
+        threading.Thread(target=self._curve_worker, daemon=True).start()
         self.apply_gui()
         centre_m = self.scene.geom_pos_m[:, 0].mean(axis=0)
         self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
@@ -139,6 +147,8 @@ class Studio:
                 scene = self.session.recompute()
                 ghost = (self.session.recompute(self.session.compare_method)
                          if self.session.compare_method else None)
+                linear = (scene.result if scene.result.method == "linear"
+                          else self.session.transition("linear"))
             except Exception as error:  # shown in the page, the server keeps running
                 self.status.content = f"**error:** {error}"
                 return
@@ -155,10 +165,32 @@ class Studio:
                 f"valid; recomputed in {1e3 * scene.seconds:.0f} ms")
         self.show_frame(min(int(self.frame.value), n - 1))
         self.last_update_s = time.perf_counter() - start
-        self._draw_curve(scene)
+        with self._curve_ready:  # the latest transition replaces any not drawn yet
+            self._curve_job = (scene.result, linear, self.dof.value or None)
+            self._curve_ready.notify_all()
 
-    def _draw_curve(self, scene: Scene) -> None:
-        """The Fig. 13 image (after the scene: it is not on the slider's critical path)."""
+    def _curve_worker(self) -> None:
+        while True:
+            with self._curve_ready:
+                self._curve_ready.wait_for(lambda: self._curve_job is not None or self._stopped)
+                if self._stopped:
+                    return
+                job, self._curve_job, self._drawing = self._curve_job, None, True
+            try:
+                self._draw_curve(*job)
+            finally:
+                with self._curve_ready:
+                    self._drawing = False
+                    self._curve_ready.notify_all()
+
+    def wait_for_curve(self, timeout: float | None = None) -> bool:
+        """Wait until the Fig. 13 image shows the latest transition; False on timeout."""
+        with self._curve_ready:
+            return self._curve_ready.wait_for(
+                lambda: self._curve_job is None and not self._drawing, timeout)
+
+    def _draw_curve(self, result, linear, dof: str | None) -> None:
+        """The Fig. 13 image of ``result`` against ``linear`` (the same clips and window)."""
         import tempfile
         from pathlib import Path
 
@@ -167,11 +199,9 @@ class Studio:
         from studio.session import dof_curve_png
 
         try:
-            linear = (scene.result if scene.result.method == "linear"
-                      else self.session.transition("linear"))
             with tempfile.TemporaryDirectory() as tmp:
                 png = Path(tmp) / "dof.png"
-                dof_curve_png(scene.result, linear, png, self.dof.value or None)
+                dof_curve_png(result, linear, png, dof)
                 rgb = matplotlib.image.imread(png)[..., :3]
             self.curve.image = (rgb * 255).round().astype(np.uint8)
         except Exception as error:  # a bad DOF name: say so in the page
@@ -228,5 +258,8 @@ class Studio:
                 self.frame.value = t
 
     def stop(self) -> None:
-        """Shut the web server down."""
+        """Shut the web server (and the Fig. 13 thread) down."""
+        with self._curve_ready:
+            self._stopped = True
+            self._curve_ready.notify_all()
         self.server.stop()

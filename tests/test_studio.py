@@ -185,3 +185,27 @@ def test_clip_1_of_another_subject_rebuilds_the_humanoid(catalog):
     fresh = Session(catalog, "05_11", "02_03")
     fresh.a_frame = 100
     np.testing.assert_allclose(second.geom_pos_m, fresh.recompute().geom_pos_m, atol=1e-12)
+
+
+def test_fig13_image_is_drawn_from_the_latest_move(session, tmp_path):
+    """The Fig. 13 image is drawn by its own thread after the scene: after several quick
+    slider moves it shows the last transition, exactly as drawn directly."""
+    import matplotlib.image
+
+    from studio.app import Studio
+    from studio.session import dof_curve_png
+
+    studio = Studio(session, port=_free_port())
+    try:
+        studio.playing.value = False
+        for alpha in (0.2, 0.4, 0.85):
+            scene = studio.set(alpha=alpha)
+        assert studio.wait_for_curve(timeout=300)
+        shown = np.array(studio.curve.image)
+        dof = studio.dof.value
+    finally:
+        studio.stop()
+    assert scene.result.alpha == 0.85
+    dof_curve_png(scene.result, session.transition("linear"), tmp_path / "c.png", dof)
+    expected = (matplotlib.image.imread(tmp_path / "c.png")[..., :3] * 255).round()
+    np.testing.assert_array_equal(shown, expected.astype(np.uint8))

@@ -4,7 +4,8 @@ server with the ``upm`` method.
 
 ``slider_to_scene_ms``: from the move to the new capsule poses and tints sent to the page
 (recomputed transition, forward kinematics and kinematic checks of every frame);
-``slider_to_scene_and_curve_ms`` adds the Fig. 13 image drawn after it. The reference,
+``slider_to_scene_and_curve_ms`` until the Fig. 13 image (drawn by a thread of its own,
+after the scene) shows it too. The reference,
 timed interleaved (alternating rounds, medians), is ``mj_kinematics`` on every frame of
 the scene: a fixed piece of library work of the scene's size.
 """
@@ -65,6 +66,7 @@ def _measure(studio, clip1: str, a_frame: int, clip2: str, b_frame: int,
     try:
         studio.playing.value = False
         studio.set(alpha=ALPHAS[0])  # sources, caches and the first figure outside the timing
+        studio.wait_for_curve()
         model = studio.scene.model
         data = mujoco.MjData(model)
         qpos = to_qpos(model, studio.scene.result.motion)
@@ -84,6 +86,7 @@ def _measure(studio, clip1: str, a_frame: int, clip2: str, b_frame: int,
                 reference_s.append(reference())
             start = time.perf_counter()
             studio.set(alpha=ALPHAS[(i + 1) % 2])
+            studio.wait_for_curve()
             total_s.append(time.perf_counter() - start)
             scene_s.append(studio.last_update_s)
             if not i % 2:
