@@ -194,12 +194,8 @@ def choose_example(result: StudyResult, frames: int) -> Example:
 
 def write_figures(result: StudyResult, statistics: Summaries, out: Path) -> dict:
     """The figures; returns ``{name: path}`` and the example's description."""
-    from eval.figures import (
-        plot_metric_chart,
-        plot_sequence_dof,
-        plot_window_dof,
-        write_filmstrip,
-    )
+    from eval.figures import plot_metric_chart, write_filmstrip
+    from upm.dof_plot import plot_sequence_dof, plot_window_dof
 
     config = result.config
     frames = figure_window(config.windows)

@@ -35,24 +35,16 @@ class Studio:
     """A running studio: a viser server drawing a :class:`~studio.session.Session`."""
 
     def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 8080):
-        import trimesh
         import viser
 
         self.session = session
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.port = self.server.get_port()
         self.lock = threading.Lock()
-        model = session.model
-        self._capsules = []
-        self._ghosts = []
-        for gid in capsule_geoms(model):
-            radius_m, half_m = model.geom_size[gid, :2]
-            mesh = trimesh.creation.capsule(height=2 * half_m, radius=radius_m, count=[8, 8])
-            self._capsules.append(self.server.scene.add_mesh_simple(
-                f"/body/g{gid}", mesh.vertices, mesh.faces, color=VALID_RGB))
-            self._ghosts.append(self.server.scene.add_mesh_simple(
-                f"/ghost/g{gid}", mesh.vertices, mesh.faces, color=GHOST_RGB, opacity=0.35,
-                visible=False))
+        self._holding = False
+        self._capsules, self._ghosts = [], []
+        self.humanoid_model = None
+        self._build_humanoid(session.model)
         self.server.scene.add_grid("/floor", width=8.0, height=8.0, plane="xy")
         gui = self.server.gui
         clips = session.catalog.names() if hasattr(session.catalog, "names") else [
@@ -79,7 +71,7 @@ class Studio:
         check = gui.add_button("physics check (upm simulate)")
         check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
         self.report = gui.add_markdown("")
-        self.dof.on_update(lambda _: self.refresh())
+        self.dof.on_update(lambda _: self.apply_gui())
         for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
                        self.compare, self.alpha, self.frames):
             handle.on_update(lambda _: self.apply_gui())
@@ -87,10 +79,36 @@ class Studio:
         self.scene: Scene | None = None
         self.ghost: Scene | None = None
         self.last_update_s = float("nan")
+        # The Fig. 13 image (about 0.1 s of matplotlib) is drawn by a thread of its own
+        # from the latest transition, so that a dragged slider moves the humanoid at the
+        # scene's pace and the image catches up with the last position.
+        self._curve_job = None
+        self._drawing = False
+        self._stopped = False
+        self._curve_ready = threading.Condition()
+        threading.Thread(target=self._curve_worker, daemon=True).start()
         self.apply_gui()
         centre_m = self.scene.geom_pos_m[:, 0].mean(axis=0)
         self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
         self.server.initial_camera.position = (centre_m[0] + 3.5, centre_m[1] - 3.5, 2.2)
+
+    def _build_humanoid(self, model) -> None:
+        """Capsule meshes of ``model`` (and their ghosts) in the scene, replacing any drawn
+        before: the studio draws clip 1's subject, whose bone lengths and girths differ."""
+        import trimesh
+
+        for handle in self._capsules + self._ghosts:
+            handle.remove()
+        self._capsules, self._ghosts = [], []
+        for gid in capsule_geoms(model):
+            radius_m, half_m = model.geom_size[gid, :2]
+            mesh = trimesh.creation.capsule(height=2 * half_m, radius=radius_m, count=[8, 8])
+            self._capsules.append(self.server.scene.add_mesh_simple(
+                f"/body/g{gid}", mesh.vertices, mesh.faces, color=VALID_RGB))
+            self._ghosts.append(self.server.scene.add_mesh_simple(
+                f"/ghost/g{gid}", mesh.vertices, mesh.faces, color=GHOST_RGB, opacity=0.35,
+                visible=False))
+        self.humanoid_model = model
 
     def set(self, **values) -> Scene:
         """Set controls by name (``alpha=0.9``, ``method="snap"``...) and recompute.
@@ -98,13 +116,21 @@ class Studio:
         The server-side API: tests and scripts drive the page through it, and every
         connected browser sees the same controls move.
         """
-        for name, value in values.items():
-            getattr(self, name).value = value
+        # Assigning a value runs its handle's callbacks at once: held back here so that
+        # the scene is recomputed once for all the values, not once per value.
+        self._holding = True
+        try:
+            for name, value in values.items():
+                getattr(self, name).value = value
+        finally:
+            self._holding = False
         self.apply_gui()
         return self.scene
 
     def apply_gui(self) -> None:
         """Copy the GUI's values into the session and recompute (what every control calls)."""
+        if self._holding:
+            return
         s = self.session
         s.clip1, s.clip2 = self.clip1.value, self.clip2.value
         s.a_frame, s.b_frame = int(self.a_frame.value), int(self.b_frame.value)
@@ -121,9 +147,13 @@ class Studio:
                 scene = self.session.recompute()
                 ghost = (self.session.recompute(self.session.compare_method)
                          if self.session.compare_method else None)
+                linear = (scene.result if scene.result.method == "linear"
+                          else self.session.transition("linear"))
             except Exception as error:  # shown in the page, the server keeps running
                 self.status.content = f"**error:** {error}"
                 return
+            if scene.model is not self.humanoid_model:  # clip 1 changed subject
+                self._build_humanoid(scene.model)
             self.scene, self.ghost = scene, ghost
             n = scene.geom_pos_m.shape[0]
             self.frame.max = n - 1
@@ -135,10 +165,32 @@ class Studio:
                 f"valid; recomputed in {1e3 * scene.seconds:.0f} ms")
         self.show_frame(min(int(self.frame.value), n - 1))
         self.last_update_s = time.perf_counter() - start
-        self._draw_curve(scene)
+        with self._curve_ready:  # the latest transition replaces any not drawn yet
+            self._curve_job = (scene.result, linear, self.dof.value or None)
+            self._curve_ready.notify_all()
 
-    def _draw_curve(self, scene: Scene) -> None:
-        """The Fig. 13 image (after the scene: it is not on the slider's critical path)."""
+    def _curve_worker(self) -> None:
+        while True:
+            with self._curve_ready:
+                self._curve_ready.wait_for(lambda: self._curve_job is not None or self._stopped)
+                if self._stopped:
+                    return
+                job, self._curve_job, self._drawing = self._curve_job, None, True
+            try:
+                self._draw_curve(*job)
+            finally:
+                with self._curve_ready:
+                    self._drawing = False
+                    self._curve_ready.notify_all()
+
+    def wait_for_curve(self, timeout: float | None = None) -> bool:
+        """Wait until the Fig. 13 image shows the latest transition; False on timeout."""
+        with self._curve_ready:
+            return self._curve_ready.wait_for(
+                lambda: self._curve_job is None and not self._drawing, timeout)
+
+    def _draw_curve(self, result, linear, dof: str | None) -> None:
+        """The Fig. 13 image of ``result`` against ``linear`` (the same clips and window)."""
         import tempfile
         from pathlib import Path
 
@@ -147,11 +199,9 @@ class Studio:
         from studio.session import dof_curve_png
 
         try:
-            linear = (scene.result if scene.result.method == "linear"
-                      else self.session.transition("linear"))
             with tempfile.TemporaryDirectory() as tmp:
                 png = Path(tmp) / "dof.png"
-                dof_curve_png(scene.result, linear, png, self.dof.value or None)
+                dof_curve_png(result, linear, png, dof)
                 rgb = matplotlib.image.imread(png)[..., :3]
             self.curve.image = (rgb * 255).round().astype(np.uint8)
         except Exception as error:  # a bad DOF name: say so in the page
@@ -170,7 +220,7 @@ class Studio:
         from studio.session import physics_check
 
         self.report.content = "physics check running..."
-        rows = physics_check(self.session.model, self.scene.result)
+        rows = physics_check(self.scene.model, self.scene.result)
         lines = []
         for row in rows:
             cells = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
@@ -208,5 +258,8 @@ class Studio:
                 self.frame.value = t
 
     def stop(self) -> None:
-        """Shut the web server down."""
+        """Shut the web server (and the Fig. 13 thread) down."""
+        with self._curve_ready:
+            self._stopped = True
+            self._curve_ready.notify_all()
         self.server.stop()

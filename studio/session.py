@@ -32,6 +32,7 @@ class Scene:
     Attributes
     ----------
     result : upm.transitions.Transition
+    model : mujoco.MjModel, the humanoid the poses are of (clip 1's subject).
     geom_pos_m : (T, G, 3) array, world positions of the G capsules per frame.
     geom_wxyz : (T, G, 4) array, their orientations as unit quaternions.
     valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision,
@@ -43,6 +44,7 @@ class Scene:
     """
 
     result: object
+    model: object
     geom_pos_m: np.ndarray
     geom_wxyz: np.ndarray
     valid: np.ndarray
@@ -51,23 +53,46 @@ class Scene:
 
 
 class Session:
-    """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``."""
+    """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``.
 
-    def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60):
-        from humanoid_xml import catalog_model_path, load_model
+    ``key_sources`` (method name -> key-posture source) are used as given; the others are
+    built on first use from ``map_path`` and the catalogue.
+    """
 
+    def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60,
+                 key_sources: dict | None = None):
         self.catalog = catalog
         self.map_path = map_path
         self.context = context
         self.clip1, self.clip2 = clip1, clip2
-        self.a_frame = catalog.load(clip1).n_frames - 1
+        self._clips: dict[str, object] = {}
+        self.a_frame = self.clip(clip1).n_frames - 1
         self.b_frame = 0
         self.method = "linear"
         self.compare_method: str | None = None
         self.alpha = 0.5
         self.frames = 20
-        self.model = load_model(catalog_model_path(catalog, clip1))
-        self._sources: dict[str, object] = {}
+        self.subject: str | None = None
+        self.model = self.humanoid()
+        self._sources: dict[str, object] = dict(key_sources or {})
+
+    def clip(self, name: str):
+        """A clip of the catalogue (``upm.Motion``), read once: a slider move must not read
+        an AMC file again (tens of milliseconds)."""
+        if name not in self._clips:
+            self._clips[name] = self.catalog.load(name)
+        return self._clips[name]
+
+    def humanoid(self):
+        """The humanoid (``mujoco.MjModel``) of clip 1's subject, built again when clip 1
+        changes to a clip of another subject (the transition is on clip 1's skeleton)."""
+        from humanoid_xml import catalog_model_path, load_model
+
+        subject = self.catalog.info(self.clip1).subject
+        if subject != self.subject:
+            self.model = load_model(catalog_model_path(self.catalog, self.clip1))
+            self.subject = subject
+        return self.model
 
     def _source(self, method: str):
         if method not in self._sources:
@@ -77,7 +102,7 @@ class Session:
     def _pieces(self):
         from upm.errors import UsageError
 
-        m1, m2 = self.catalog.load(self.clip1), self.catalog.load(self.clip2)
+        m1, m2 = self.clip(self.clip1), self.clip(self.clip2)
         if not 0 <= self.a_frame < m1.n_frames or not 0 <= self.b_frame < m2.n_frames:
             raise UsageError(f"frame out of range: {self.clip1}@{self.a_frame} "
                              f"({m1.n_frames} frames), {self.clip2}@{self.b_frame} "
@@ -100,12 +125,13 @@ class Session:
         from controller.validity import check_motion
 
         start = time.perf_counter()
+        model = self.humanoid()
         result = self.transition(method)
-        pos, wxyz = capsule_poses(self.model, to_qpos(self.model, result.motion))
-        validity = check_motion(self.model, result.motion, [result.window])
-        bodies = offending_bodies(self.model, validity)
-        offending = bodies[:, self.model.geom_bodyid[capsule_geoms(self.model)]]
-        return Scene(result, pos, wxyz, np.asarray(validity.valid, bool), offending,
+        pos, wxyz = capsule_poses(model, to_qpos(model, result.motion))
+        validity = check_motion(model, result.motion, [result.window])
+        bodies = offending_bodies(model, validity)
+        offending = bodies[:, model.geom_bodyid[capsule_geoms(model)]]
+        return Scene(result, model, pos, wxyz, np.asarray(validity.valid, bool), offending,
                      time.perf_counter() - start)
 
 
@@ -196,7 +222,7 @@ def dof_curve_png(result, linear, path, dof: str | None = None) -> str:
 
     Returns the DOF drawn (``dof``, or the one where the two differ most).
     """
-    from eval.figures import plot_window_dof
+    from upm.dof_plot import plot_window_dof
 
     return plot_window_dof(path, {result.method: result, "linear": linear}, dof=dof)
 

@@ -37,6 +37,22 @@ def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
         assert maps[f"reference_ckdtree_4_classes_us_{kind}"] > 0
     methods = report["benchmarks"]["transitions"]["methods"]
     assert methods["upm"]["ratio_to_reference"] > 0 and methods["linear"]["us_per_transition"] > 0
+    # every issue-13 target sits beside its figure, judged by the same-run ratio too
+    for bench, names in (("posture_map", ("upm_train_s", "key_posture_us_single",
+                                          "key_posture_us_batched")),
+                         ("transitions", ("upm", "linear")), ("studio", ("slider_to_scene_ms",))):
+        for name in names:
+            entry = report["benchmarks"][bench]["targets"][name]
+            assert entry["met"] == (entry["value"] <= entry["target"])
+            if "ratio" in entry:
+                assert entry["met_by_ratio"] == (entry["ratio"] <= entry["target_ratio"])
+    assert maps["targets"]["key_posture_us_single"]["value"] == maps["key_posture_us_single"]
+    # the studio's slider move, through its server-side API on a running server
+    studio = report["benchmarks"]["studio"]
+    low, high = studio["slider_to_scene_ratio_range"]
+    assert low <= studio["slider_to_scene_ratio_to_reference"] <= high
+    assert 0 < studio["slider_to_scene_ms"] <= studio["slider_to_scene_and_curve_ms"]
+    assert studio["window_frames"] == 20 and studio["method"] == "upm"
 
 
 def test_bench_unknown_name(data_dir, capsys):

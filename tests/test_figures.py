@@ -2,8 +2,8 @@
 
 import pytest
 
-from eval.figures import SHOULDER_DOFS, plot_window_dof
 from tests.transition_data import pair, sources
+from upm.dof_plot import SHOULDER_DOFS, plot_window_dof
 from upm.errors import UsageError
 from upm.transitions import transition
 

@@ -8,13 +8,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from upm.angles import angle_diff_deg, wrap_deg
-from upm.angular_search import AngularIndex, pairwise_sq_deg
+from upm.angles import angle_diff_deg, interpolate_deg, wrap_deg
+from upm.angular_search import AngularIndex, pairwise_sq_deg, rowwise_sq_deg
 from upm.class_maps import nearest_distance_deg, off_data_share
 from upm.errors import DataFileError, UsageError
 from upm.posture_map import UniformPostureMap, default_radius_deg, load_map
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
 from upm.som import default_grid, train_som_class
+from upm.torus_tree import TorusForest
 from upm.upm_training import _batch_step, _GrowingMap, _MapSearch, train_upm_class
 
 # -- exact search under wrapped distance ----------------------------------------------
@@ -276,6 +277,66 @@ def test_key_posture_batched_equals_one_at_a_time(small_map):
     assert many_alpha.shape == (50, 63)
     assert np.array_equal(many_alpha[20], upm.key_posture(a[3], b[3], alpha[20]))
     assert upm.key_posture(a, b, 0.5).shape == (50, 63)
+
+
+# -- the compiled key-posture search ----------------------------------------------------
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 150), st.integers(0, 2**32 - 1))
+def test_forest_is_exact_with_ties_constant_dofs_and_the_seam(k, seed):
+    """Integer degrees make every squared distance an exact integer, so ties are exact:
+    the forest must give numpy's argmin (the lowest index) and the exact distance."""
+    rng = np.random.default_rng(seed)
+    seam = np.array([-180.0, -179.0, -90.0, 0.0, 178.0, 179.0])
+    blocks = [rng.integers(-180, 180, size=(k, 3)).astype(float),
+              np.repeat(rng.integers(-180, 180, size=(1, 2)).astype(float), k, axis=0),
+              rng.choice(seam, size=(k, 4))]
+    blocks[2][:, 1] = 7.0  # one DOF shared by every neuron of the block
+    columns = [slice(0, 3), slice(3, 5), slice(5, 9)]
+    forest = TorusForest(blocks, columns, leaf_size=4)
+    points = rng.integers(-180, 180, size=(40, 9)).astype(float)
+    points[:10, 5:] = rng.choice(seam, size=(10, 4))
+    index, dist_sq, out = forest.nearest(points)
+    for i, (w, sl) in enumerate(zip(blocks, columns, strict=True)):
+        brute = pairwise_sq_deg(points[:, sl], w)
+        np.testing.assert_array_equal(index[:, i], brute.argmin(axis=1))
+        np.testing.assert_array_equal(dist_sq[:, i], brute.min(axis=1))
+        np.testing.assert_array_equal(out[:, sl], w[index[:, i]])
+
+
+def test_compiled_key_posture_is_the_per_class_search_on_real_pairs(catalog):
+    """The key posture of the one compiled call against the search it replaced (the
+    interpolated point in numpy, then one AngularIndex per class), on 4,000 pairs of
+    real held-out frames: identical, except where two neurons of a class are at exactly
+    the nearest distance (the map holds near-duplicate neurons; the two searches break
+    such ties differently): then both are nearest and within 1e-12 degrees."""
+    from upm.map_cache import trained_map
+
+    upm = trained_map(catalog, "upm")
+    frames = np.concatenate([catalog.load(n).posture_deg for n in catalog.names("test")])
+    rng = np.random.default_rng(7)
+    n = 4000
+    a = frames[rng.integers(len(frames), size=n)]
+    b = frames[rng.integers(len(frames), size=n)]
+    alpha = rng.uniform(0.0, 1.0, n)
+    alpha[:1000], alpha[1000:1100], alpha[1100:1200] = 0.5, 0.0, 1.0
+    got = upm.key_posture(a, b, alpha)
+    point = wrap_deg(interpolate_deg(a, b, alpha[:, None]))
+    expected = np.empty_like(point)
+    for c in CLASS_NAMES:
+        index, _ = AngularIndex(upm.neurons[c]).nearest(point[:, CLASS_SLICES[c]])
+        expected[:, CLASS_SLICES[c]] = upm.neurons[c][index]
+    differ = np.any(got != expected, axis=1)
+    assert differ.sum() <= n // 1000
+    np.testing.assert_allclose(got[differ], expected[differ], rtol=0.0, atol=1e-12)
+    for c in CLASS_NAMES:
+        sl = CLASS_SLICES[c]
+        np.testing.assert_allclose(rowwise_sq_deg(point[differ][:, sl], got[differ][:, sl]),
+                                   rowwise_sq_deg(point[differ][:, sl],
+                                                  expected[differ][:, sl]), rtol=1e-12)
+    # single queries take the same path
+    for i in (0, 1500, 3999):
+        assert np.array_equal(upm.key_posture(a[i], b[i], float(alpha[i])), got[i])
 
 
 def test_key_posture_goes_the_short_way_round():

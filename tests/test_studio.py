@@ -154,3 +154,58 @@ def test_fig13_curve_is_drawn(session, tmp_path):
     assert dof_curve_png(result, linear, tmp_path / "c.png", "rhumerus.rz") == "rhumerus.rz"
     rgb = matplotlib.image.imread(tmp_path / "c.png")[..., :3]
     assert rgb.std() > 0.05
+
+
+def test_clip_1_of_another_subject_rebuilds_the_humanoid(catalog):
+    """02_01 -> 05_11 as clip 1: the page's capsules become subject 05's (built from its
+    MJCF) and the poses are those of a studio opened on 05_11."""
+    from humanoid_xml import catalog_model_path, load_model
+    from studio.app import Studio
+    from studio.session import Session, capsule_geoms
+
+    studio = Studio(Session(catalog, "02_01", "02_03"), port=_free_port())
+    try:
+        first = studio.scene
+        calls = []
+        recompute = studio.session.recompute
+        studio.session.recompute = lambda *a: calls.append(a) or recompute(*a)
+        second = studio.set(clip1="05_11", a_frame=100)
+        assert len(calls) == 1, "set() recomputes once for all its values"
+        capsules = [np.asarray(h.vertices) for h in studio._capsules]
+    finally:
+        studio.stop()
+    expected = load_model(catalog_model_path(catalog, "05_11"))
+    assert not np.allclose(first.model.geom_size, expected.geom_size)
+    np.testing.assert_array_equal(second.model.geom_size, expected.geom_size)
+    # each capsule mesh (long axis z) spans its geom's half-length plus radius
+    gids = capsule_geoms(expected)
+    assert len(capsules) == len(gids)
+    for vertices, gid in zip(capsules, gids, strict=True):
+        assert vertices[:, 2].max() == pytest.approx(expected.geom_size[gid, :2].sum(), rel=1e-6)
+    fresh = Session(catalog, "05_11", "02_03")
+    fresh.a_frame = 100
+    np.testing.assert_allclose(second.geom_pos_m, fresh.recompute().geom_pos_m, atol=1e-12)
+
+
+def test_fig13_image_is_drawn_from_the_latest_move(session, tmp_path):
+    """The Fig. 13 image is drawn by its own thread after the scene: after several quick
+    slider moves it shows the last transition, exactly as drawn directly."""
+    import matplotlib.image
+
+    from studio.app import Studio
+    from studio.session import dof_curve_png
+
+    studio = Studio(session, port=_free_port())
+    try:
+        studio.playing.value = False
+        for alpha in (0.2, 0.4, 0.85):
+            scene = studio.set(alpha=alpha)
+        assert studio.wait_for_curve(timeout=300)
+        shown = np.array(studio.curve.image)
+        dof = studio.dof.value
+    finally:
+        studio.stop()
+    assert scene.result.alpha == 0.85
+    dof_curve_png(scene.result, session.transition("linear"), tmp_path / "c.png", dof)
+    expected = (matplotlib.image.imread(tmp_path / "c.png")[..., :3] * 255).round()
+    np.testing.assert_array_equal(shown, expected.astype(np.uint8))

@@ -55,6 +55,29 @@ def test_continuous_euler_reproduces_continuous_data(walk):
     np.testing.assert_allclose(angles, walk.root[:, 3:], atol=1e-9)
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from(ORDERS), st.integers(0, 2**32 - 1), st.sampled_from([1.0, 10.0, 60.0]))
+def test_continuous_euler_in_every_order(order, seed, step_deg):
+    """Random paths in each rotation order, with whole turns in the start: the angles
+    give back every rotation and move less than 180 degrees a frame, from within 180
+    degrees of the start; a smooth path away from gimbal lock comes back as given,
+    shifted by whole turns (large random steps may take the other branch, nearer)."""
+    rng = np.random.default_rng(seed)
+    middle = "XYZ".index(order[1])
+    path = np.cumsum(rng.normal(0.0, step_deg, (40, 3)), axis=0)
+    path[:, middle] = 60.0 * np.sin(np.linspace(0.0, 3.0, 40) + rng.uniform(0, 6))
+    matrices = euler_to_matrix(path, order)
+    start = path[0] + 360.0 * rng.integers(-2, 3, 3) + rng.normal(0.0, 5.0, 3)
+    angles = continuous_euler_deg(matrices, order, start)
+    np.testing.assert_allclose(euler_to_matrix(angles, order), matrices, atol=1e-9)
+    assert np.all(np.abs(angles[0] - start) < 180.0)
+    assert np.all(np.abs(np.diff(angles, axis=0)) < 180.0)
+    if step_deg < 60.0:  # small steps: the very same path, whole turns apart
+        turns = (angles - path) / 360.0
+        np.testing.assert_allclose(turns, np.round(turns), atol=1e-9)
+        np.testing.assert_allclose(angles - angles[0], path - path[0], atol=1e-9)
+
+
 def test_quaternion_log_exp_agree_with_scipy():
     rotations = Rotation.random(500, random_state=11)
     m = rotations.as_matrix()

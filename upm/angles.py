@@ -58,8 +58,25 @@ def interpolate_deg(a_deg, b_deg, alpha):
 
 def unwrap_deg(angle_deg, axis: int = 0):
     """Remove 360-degree jumps along ``axis`` (time), so consecutive samples differ by
-    less than 180 degrees. The first sample is kept as given."""
-    return np.unwrap(np.asarray(angle_deg, dtype=float), period=360.0, axis=axis)
+    less than 180 degrees. The first sample is kept as given.
+
+    ``np.unwrap(angle_deg, period=360, axis=axis)`` to the last bit -- the same
+    operations in the same order -- without its generic set-up, which costs more than
+    the arithmetic on a transition's few frames.
+    """
+    p = np.asarray(angle_deg, dtype=float)
+    if axis != 0:
+        return np.unwrap(p, period=360.0, axis=axis)
+    if p.shape[0] < 2:
+        return p.copy()
+    dd = p[1:] - p[:-1]
+    ddmod = np.mod(dd + 180.0, 360.0) - 180.0
+    np.copyto(ddmod, 180.0, where=(ddmod == -180.0) & (dd > 0))
+    correction = ddmod - dd
+    np.copyto(correction, 0.0, where=np.abs(dd) < 180.0)
+    out = p.copy()
+    out[1:] = p[1:] + correction.cumsum(axis=0)
+    return out
 
 
 def angular_distance_sq(x_deg, w_deg):

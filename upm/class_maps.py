@@ -9,8 +9,9 @@ cost nothing in any distance and keep every neuron a full sub-vector of the post
 **Key posture** (paper section 3.1) of postures A, B at ratio ``alpha``: per class,
 ``C = A + alpha * wrap(B - A)`` per DOF (the short way round; **alpha = 0 is A, alpha =
 1 is B** -- the paper's code weights the other way round), then the neuron nearest to C
-by wrapped distance; the four neurons joined. Nearest-neuron search is exact
-(:mod:`upm.angular_search`).
+by wrapped distance; the four neurons joined. Nearest-neuron search is exact: the key
+posture and :meth:`ClassMaps.nearest_neurons` search the four classes in one compiled
+call (:mod:`upm.torus_tree`), the other queries with :mod:`upm.angular_search`.
 
 **File** (``.npz``, read with ``allow_pickle=False``): ``format``, ``format_version``,
 ``kind`` ("upm" or "som"), the layout (``class_names``, ``class_slices``, ``dof_names``),
@@ -29,7 +30,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from upm.angles import interpolate_deg, wrap_deg
+from upm.angles import wrap_deg
 from upm.angular_search import AngularIndex
 from upm.errors import DataFileError, UsageError
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES, POSTURE_DOF_NAMES, POSTURE_SIZE
@@ -59,6 +60,8 @@ def check_postures(postures_deg, what: str = "postures") -> np.ndarray:
 
 def check_alpha(alpha) -> np.ndarray:
     """The ratio(s) alpha as a float array; UsageError if NaN or outside [0, 1]."""
+    if type(alpha) is float and 0.0 <= alpha <= 1.0:  # the common case, without numpy's
+        return np.asarray(alpha)                      # per-call overhead (NaN fails here)
     try:
         a = np.asarray(alpha, dtype=float)
     except (TypeError, ValueError):
@@ -137,6 +140,7 @@ class ClassMaps:
         self.stats: dict = {}
         self.provenance: dict = {}
         self._indexes: dict[str, AngularIndex] = {}
+        self._forest = None
 
     # -- queries -------------------------------------------------------------------
     @property
@@ -153,6 +157,17 @@ class ClassMaps:
         if class_name not in self._indexes:
             self._indexes[class_name] = AngularIndex(self.neurons[class_name])
         return self._indexes[class_name]
+
+    def forest(self):
+        """The four classes' neurons in one exact search (:class:`upm.torus_tree.TorusForest`,
+        built on first use)."""
+        from upm.torus_tree import TorusForest
+
+        self._require_fitted()
+        if self._forest is None:
+            self._forest = TorusForest([self.neurons[c] for c in CLASS_NAMES],
+                                       [CLASS_SLICES[c] for c in CLASS_NAMES])
+        return self._forest
 
     def n_neurons(self) -> dict[str, int]:
         """Neurons per class."""
@@ -172,12 +187,7 @@ class ClassMaps:
         """
         self._require_fitted()
         p = check_postures(postures_deg)
-        flat = p.reshape(-1, POSTURE_SIZE)
-        out = np.empty_like(flat)
-        for c in CLASS_NAMES:
-            sl = CLASS_SLICES[c]
-            idx, _ = self.index(c).nearest(flat[:, sl])
-            out[:, sl] = self.neurons[c][idx]
+        _, _, out = self.forest().nearest(wrap_deg(p.reshape(-1, POSTURE_SIZE)))
         return out.reshape(p.shape)
 
     def key_posture(self, a_deg, b_deg, alpha=0.5) -> np.ndarray:
@@ -212,8 +222,18 @@ class ClassMaps:
         except ValueError:
             raise UsageError(f"shapes do not broadcast: A {a.shape}, B {b.shape}, "
                              f"alpha {t.shape}") from None
-        between = interpolate_deg(a, b, t[..., None])
-        return self.nearest_neurons(np.broadcast_to(between, lead + (POSTURE_SIZE,)))
+        shape = lead + (POSTURE_SIZE,)
+        if a.shape == b.shape == shape and t.ndim == 0:  # one pair or pairs, one alpha
+            out = self.forest().key_postures(
+                np.ascontiguousarray(a.reshape(-1, POSTURE_SIZE)),
+                np.ascontiguousarray(b.reshape(-1, POSTURE_SIZE)),
+                np.full(a.size // POSTURE_SIZE, float(t)))
+            return out.reshape(shape)
+        out = self.forest().key_postures(
+            np.ascontiguousarray(np.broadcast_to(a, shape).reshape(-1, POSTURE_SIZE)),
+            np.ascontiguousarray(np.broadcast_to(b, shape).reshape(-1, POSTURE_SIZE)),
+            np.ascontiguousarray(np.broadcast_to(t, lead).reshape(-1)))
+        return out.reshape(shape)
 
     def quantisation_error(self, postures_deg) -> dict[str, dict[str, float]]:
         """Per class, the mean and largest wrapped distance (degrees) from the given
@@ -229,10 +249,17 @@ class ClassMaps:
 
     # -- training helpers ------------------------------------------------------------
     def _set_trained(self, neurons: dict[str, np.ndarray], postures: np.ndarray,
-                     clip_names, seconds: float, class_stats: dict) -> None:
+                     clip_names, seconds: float, class_stats: dict,
+                     errors: dict | None = None) -> None:
+        """Keep trained neurons; ``errors`` (per class: mean and largest distance of the
+        postures to the wrapped neurons) when the training measured them already."""
         self.neurons = {c: np.ascontiguousarray(wrap_deg(neurons[c])) for c in CLASS_NAMES}
-        self._indexes = {}
-        error = self.quantisation_error(postures)
+        self._indexes, self._forest = {}, None
+        if errors is None:
+            error = self.quantisation_error(postures)
+        else:
+            error = {c: {"mean_deg": errors[c][0], "max_deg": errors[c][1]}
+                     for c in CLASS_NAMES}
         self.stats = {
             c: {"neurons": len(self.neurons[c]),
                 "quantisation_error_mean_deg": error[c]["mean_deg"],
@@ -332,7 +359,7 @@ class ClassMaps:
                 raise DataFileError(path, f"{key} holds NaN or infinite values")
             neurons[c] = np.ascontiguousarray(w, dtype=float)
         self.neurons = neurons
-        self._indexes = {}
+        self._indexes, self._forest = {}, None
         self._restore_extra(arrays, path)
 
 

@@ -171,28 +171,27 @@ class UniformPostureMap(ClassMaps):
         x = self._training_postures(postures_deg)
         p = self.params
         start_s = time.perf_counter()
-        neurons, class_stats = {}, {}
-        radius, neighbourhood, jobs = {}, {}, {}
-        for c in CLASS_NAMES:
-            sub = x[:, CLASS_SLICES[c]]
-            radius[c] = (default_radius_deg(sub, seed=p["seed"]) if self._radius[c] is None
-                         else self._radius[c])
-            neighbourhood[c] = (radius[c] if self._neighbourhood[c] is None
-                                else self._neighbourhood[c])
-            jobs[c] = (sub, radius[c], neighbourhood[c], {
-                "learning_rate": p["learning_rate"], "passes": p["passes"],
-                "batch_size": p["batch_size"], "seed": p["seed"], "shuffle": p["shuffle"]})
-        # The classes are independent: trained in parallel, identical neurons.
+        neurons, class_stats, errors = {}, {}, {}
+        # The classes are independent: trained in parallel (default R, training and
+        # quantisation error in each worker), identical neurons.
+        jobs = {c: (x[:, CLASS_SLICES[c]], self._radius[c], self._neighbourhood[c], {
+            "learning_rate": p["learning_rate"], "passes": p["passes"],
+            "batch_size": p["batch_size"], "seed": p["seed"], "shuffle": p["shuffle"]})
+            for c in CLASS_NAMES}
         results = train_upm_classes(jobs, workers=self.workers,
                                     desc="UPM classes" if self.show_progress else None)
         for c in CLASS_NAMES:
             result = results[c]
             neurons[c] = result.neurons_deg
-            class_stats[c] = {"radius_deg": radius[c], "neighbourhood_deg": neighbourhood[c],
+            errors[c] = result.quantisation_error_deg
+            class_stats[c] = {"radius_deg": result.radius_deg,
+                              "neighbourhood_deg": result.neighbourhood_deg,
                               "births_per_pass": list(result.births_per_pass),
                               "train_seconds": result.seconds}
-        p["radius_deg"], p["neighbourhood_deg"] = radius, neighbourhood
-        self._set_trained(neurons, x, clip_names, time.perf_counter() - start_s, class_stats)
+        p["radius_deg"] = {c: results[c].radius_deg for c in CLASS_NAMES}
+        p["neighbourhood_deg"] = {c: results[c].neighbourhood_deg for c in CLASS_NAMES}
+        self._set_trained(neurons, x, clip_names, time.perf_counter() - start_s, class_stats,
+                          errors)
         return self
 
     def _restore_extra(self, arrays, path) -> None:

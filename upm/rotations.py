@@ -39,6 +39,25 @@ def axis_rotation(angle_deg, axis: str) -> np.ndarray:
     return m
 
 
+def _entries():
+    """Flat positions in a (3 axes, 3, 3) array of the unit, cos, sin and -sin entries of
+    the three axis rotations (as :func:`axis_rotation` lays them out)."""
+    unit, cos, sin, minus_sin = [], [], [], []
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        unit.append(9 * i + 3 * i + i)
+        cos += [9 * i + 3 * j + j, 9 * i + 3 * k + k]
+        sin.append(9 * i + 3 * k + j)
+        minus_sin.append(9 * i + 3 * j + k)
+    # cos and sin of angle i fill their two / one entries of rotation i
+    return (np.array(unit), np.array(cos).reshape(3, 2), np.array(sin),
+            np.array(minus_sin))
+
+
+_UNIT, _COS_PAIRS, _SIN, _MINUS_SIN = _entries()
+_COS = _COS_PAIRS.T  # (2, 3): assigning c (..., 3) to each row fills both cos entries
+
+
 def euler_to_matrix(angles_deg, order: str = "XYZ") -> np.ndarray:
     """Compose per-axis rotations, the first letter of ``order`` applied first.
 
@@ -60,11 +79,18 @@ def euler_to_matrix(angles_deg, order: str = "XYZ") -> np.ndarray:
     a = np.asarray(angles_deg, dtype=float)
     if sorted(order) != ["X", "Y", "Z"]:
         raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
-    result = None
-    for axis in order:
-        r = axis_rotation(a[..., _AXIS_INDEX[axis]], axis)
-        result = r if result is None else r @ result
-    return result
+    # The rotations about X, Y and Z at once (the entries of axis_rotation, placed by
+    # index), then composed in order: a few array operations whatever the order.
+    theta = np.deg2rad(a)
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.zeros(a.shape[:-1] + (27,))
+    m[..., _UNIT] = 1.0
+    m[..., _COS] = c[..., None, :]
+    m[..., _SIN] = s
+    m[..., _MINUS_SIN] = -s
+    m = m.reshape(a.shape[:-1] + (3, 3, 3))
+    first, middle, last = (_AXIS_INDEX[axis] for axis in order)
+    return m[..., last, :, :] @ (m[..., middle, :, :] @ m[..., first, :, :])
 
 
 def _alternate_euler(angles_deg: np.ndarray, order: str) -> np.ndarray:
@@ -150,8 +176,8 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     Each frame takes the Tait-Bryan solution (of the two) and the whole turn nearest to
     the previous frame's angles, so a smooth rotation path gives angles without
     360-degree or branch jumps (except through gimbal lock, where the angles of any
-    representation change fast). Vectorised: the branch of each frame follows from
-    whether the principal solution switches branch between consecutive frames.
+    representation change fast): the principal solution switches branch at frame t when
+    it is nearer the previous frame's alternate solution than its principal one.
 
     Parameters
     ----------
@@ -167,58 +193,26 @@ def continuous_euler_deg(matrix, order: str, start_deg) -> np.ndarray:
     -------
     ndarray, shape (T, 3)
     """
-    principal = matrix_to_euler_deg(matrix, order)
-    if principal.shape[0] == 0:
-        return principal
-    alt = _alternate_euler(principal, order)
-    start = np.asarray(start_deg, dtype=float)
+    from upm.rotation_kernels import continuous_euler
 
-    def distance(x, y):
-        d = np.mod(x - y + 180.0, 360.0) - 180.0
-        return np.einsum("...i,...i->...", d, d)
-
-    # Branch of frame 0 from the start; afterwards, the principal solution "flips" at t
-    # when its frame-t value is nearer the alternate solution of frame t-1 than the
-    # principal one. The chosen branch is the running parity of the flips.
-    first_alt = distance(alt[0], start) < distance(principal[0], start)
-    flips = distance(principal[1:], alt[:-1]) < distance(principal[1:], principal[:-1])
-    parity = np.concatenate([[first_alt], first_alt ^ (np.cumsum(flips) % 2 == 1)])
-    chosen = np.where(parity[:, None], alt, principal)
-    chained = np.concatenate([start[None], chosen])
-    return np.unwrap(chained, period=360.0, axis=0)[1:]
-
-
-def _shepperd_coefficients() -> np.ndarray:
-    """(10, 16): ``[1, m00, m01, ..., m22] @ C`` gives Shepperd's four candidate rows
-    (each 4 components, flattened) of :func:`matrix_to_quaternion`."""
-    c = np.zeros((10, 4, 4))
-
-    def entry(i, j):
-        return 1 + 3 * i + j
-
-    signs = ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))
-    for row, (s0, s1, s2) in enumerate(signs):  # the diagonal entry of candidate row
-        c[0, row, row] = 1.0
-        c[entry(0, 0), row, row], c[entry(1, 1), row, row], c[entry(2, 2), row, row] = s0, s1, s2
-    # Off-diagonal entries: (row, col) -> (a, b, sign): m[a] + sign * m[b].
-    pairs = {(0, 1): ((2, 1), (1, 2), -1), (0, 2): ((0, 2), (2, 0), -1),
-             (0, 3): ((1, 0), (0, 1), -1), (1, 2): ((0, 1), (1, 0), 1),
-             (1, 3): ((0, 2), (2, 0), 1), (2, 3): ((1, 2), (2, 1), 1)}
-    for (row, col), (a, b, sign) in pairs.items():
-        for r, k in ((row, col), (col, row)):
-            c[entry(*a), r, k] = 1.0
-            c[entry(*b), r, k] = sign
-    return c.reshape(10, 16)
-
-
-_SHEPPERD = _shepperd_coefficients()
+    m = np.asarray(matrix, dtype=float)
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
+    if m.shape[0] == 0:
+        return np.zeros((0, 3))
+    # The principal solution as matrix_to_euler_deg gives it; branch and turns in one
+    # compiled pass along time (:func:`upm.rotation_kernels.continuous_euler`).
+    i, j, k = (_AXIS_INDEX[axis] for axis in order)
+    return continuous_euler(np.ascontiguousarray(m.reshape(-1, 9)), i, j, k,
+                            1.0 if (j - i) % 3 == 1 else -1.0,
+                            np.array(start_deg, dtype=float).reshape(3), _GIMBAL_LOCK_COS)
 
 
 def matrix_to_quaternion(matrix) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` of rotation matrices, with ``w >= 0``.
 
-    Shepperd's method (the largest of the four diagonal combinations), vectorised: the
-    four candidate rows are one linear map of the matrix entries.
+    Shepperd's method: the largest of the four diagonal combinations gives the
+    best-conditioned row (compiled loop: :mod:`upm.rotation_kernels`).
 
     Parameters
     ----------
@@ -228,16 +222,10 @@ def matrix_to_quaternion(matrix) -> np.ndarray:
     -------
     ndarray, shape (..., 4)
     """
+    from upm.rotation_kernels import quaternions
+
     m = np.asarray(matrix, dtype=float)
-    shape = m.shape[:-2]
-    flat = m.reshape(-1, 9)
-    candidates = (flat @ _SHEPPERD[1:] + _SHEPPERD[0]).reshape(-1, 4, 4)
-    rows = np.arange(len(flat))
-    best = np.argmax(candidates[:, (0, 1, 2, 3), (0, 1, 2, 3)], axis=1)
-    q = candidates[rows, best]
-    q /= np.sqrt(np.einsum("ij,ij->i", q, q))[:, None]
-    q[q[:, 0] < 0] *= -1.0
-    return q.reshape(shape + (4,))
+    return quaternions(np.ascontiguousarray(m.reshape(-1, 9))).reshape(m.shape[:-2] + (4,))
 
 
 def rotation_log(matrix) -> np.ndarray:
@@ -251,12 +239,10 @@ def rotation_log(matrix) -> np.ndarray:
     -------
     ndarray, shape (..., 3)
     """
-    q = matrix_to_quaternion(matrix)
-    sine = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(sine, q[..., :1])
-    # angle / sin(angle / 2) -> 2 as the angle -> 0.
-    scale = np.where(sine > 1e-12, angle / np.where(sine > 1e-12, sine, 1.0), 2.0)
-    return scale * q[..., 1:]
+    from upm.rotation_kernels import logs
+
+    m = np.asarray(matrix, dtype=float)
+    return logs(np.ascontiguousarray(m.reshape(-1, 9))).reshape(m.shape[:-2] + (3,))
 
 
 def rotation_exp(rotvec) -> np.ndarray:
@@ -270,13 +256,7 @@ def rotation_exp(rotvec) -> np.ndarray:
     -------
     ndarray, shape (..., 3, 3)
     """
+    from upm.rotation_kernels import exps
+
     v = np.asarray(rotvec, dtype=float)
-    theta = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = np.zeros(v.shape[:-1] + (3, 3))
-    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
-    k[..., 1, 0], k[..., 2, 0], k[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
-    small = theta < 1e-8
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
-    return np.eye(3) + a * k + b * (k @ k)
+    return exps(np.ascontiguousarray(v.reshape(-1, 3))).reshape(v.shape[:-1] + (3, 3))

@@ -162,13 +162,17 @@ class Skeleton:
     def extra_channels(self) -> tuple[tuple[str, str], ...]:
         """The declared DOFs of bones outside the 21 joints, as ``(bone, dof)`` pairs in
         ASF bone order: read from and written to AMC files, never articulated."""
-        joints = set(JOINTS)
-        return tuple(
-            (bone, dof)
-            for bone, dofs in zip(self.bone_names[1:], self.dofs[1:], strict=True)
-            if bone not in joints
-            for dof in dofs
-        )
+        cached = self.__dict__.get("_extra_cache")
+        if cached is None:  # asked for on every transition: built once
+            joints = set(JOINTS)
+            cached = tuple(
+                (bone, dof)
+                for bone, dofs in zip(self.bone_names[1:], self.dofs[1:], strict=True)
+                if bone not in joints
+                for dof in dofs
+            )
+            object.__setattr__(self, "_extra_cache", cached)
+        return cached
 
     @property
     def extra_limits_deg(self) -> np.ndarray:

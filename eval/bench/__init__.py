@@ -87,6 +87,25 @@ def timeit_interleaved(fn: Callable[[], object], reference: Callable[[], object]
             "ratio_max": max(ratios), "rounds": rounds}
 
 
+def target(value: float, limit: float, ratio: float | None = None,
+           ratio_limit: float | None = None) -> dict:
+    """A speed target of issue 13 beside the figure: the absolute ``limit`` (met or not on
+    this machine, as loaded as it is) and, where the figure has a same-run reference,
+    the ratio that ``limit`` was against that reference when the target was set (the
+    figure that carries across machines and load).
+
+    Returns
+    -------
+    dict
+        ``value``, ``target``, ``met``; with a ratio also ``ratio``, ``target_ratio``,
+        ``met_by_ratio``.
+    """
+    out = {"value": value, "target": limit, "met": bool(value <= limit)}
+    if ratio is not None and ratio_limit is not None:
+        out.update(ratio=ratio, target_ratio=ratio_limit, met_by_ratio=bool(ratio <= ratio_limit))
+    return out
+
+
 def clip_on_humanoid(context: BenchContext, clip: str, quick_frames: int):
     """A real clip (its first ``quick_frames`` frames in quick mode) and the humanoid of its
     subject: the material of the MuJoCo benchmarks.

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eval.bench import BenchContext, timeit_interleaved
+from eval.bench import BenchContext, target, timeit_interleaved
 
 NAME = "transitions"
 
@@ -26,6 +26,10 @@ NAME = "transitions"
 PAIRS = (("02_01", 200, "02_03", 20), ("05_01", 300, "05_11", 100), ("16_15", 250, "03_01", 50))
 WINDOW = 20
 CLIP_FRAMES = 60
+#: Issue 13's targets per 20-frame transition (microseconds), set when the reference (one
+#: cubic spline fit) took 60 us.
+TARGETS_US = {"upm": 500.0, "linear": 300.0}
+REFERENCE_AT_TARGETS_US = 60.0
 
 
 def run(context: BenchContext) -> dict:
@@ -99,4 +103,8 @@ def run(context: BenchContext) -> dict:
                                     / figures["upm"]["ratio_to_reference"])
     report["feasible_over_upm"] = (figures["feasible"]["ratio_to_reference"]
                                    / figures["upm"]["ratio_to_reference"])
+    report["targets"] = {
+        name: target(figures[name]["us_per_transition"], limit,
+                     figures[name]["ratio_to_reference"], limit / REFERENCE_AT_TARGETS_US)
+        for name, limit in TARGETS_US.items()}
     return report

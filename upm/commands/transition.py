@@ -180,7 +180,7 @@ def run(args) -> int:
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     if args.plot:
-        from eval.figures import plot_window_dof
+        from upm.dof_plot import plot_window_dof
 
         linear = result if args.method == "linear" else transition(
             "linear", before, after, args.frames, args.alpha, align_heading=args.align_heading)

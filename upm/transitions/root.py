@@ -30,13 +30,13 @@
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from upm.angles import wrap_deg
 from upm.rotations import (
-    axis_rotation,
     continuous_euler_deg,
     euler_to_matrix,
     matrix_to_quaternion,
@@ -44,9 +44,9 @@ from upm.rotations import (
     rotation_log,
 )
 from upm.skeleton import Skeleton
-from upm.transitions.spline import SPLINE_CONTEXT, keyframe_spline
+from upm.transitions.spline import SPLINE_CONTEXT, spline_weights
 
-_HORIZONTAL = [0, 2]
+_HORIZONTAL = slice(0, 3, 2)  # tx, tz (a slice: views, not fancy-index copies)
 
 
 @dataclass(frozen=True)
@@ -81,7 +81,11 @@ def heading_deg(matrix) -> np.ndarray:
         Degrees in [-180, 180): the angle theta of ``R = Ry(theta) S`` where S turns
         about a horizontal axis.
     """
-    q = matrix_to_quaternion(matrix)  # w, x, y, z with w >= 0
+    return _heading_of_quaternion(matrix_to_quaternion(matrix))
+
+
+def _heading_of_quaternion(q) -> np.ndarray:
+    """:func:`heading_deg` from unit quaternions ``(..., 4)`` (w, x, y, z; w >= 0)."""
     return wrap_deg(2.0 * np.degrees(np.arctan2(q[..., 2], q[..., 0])))
 
 
@@ -97,8 +101,46 @@ def leg_length_m(skeleton: Skeleton) -> float:
     return float(-rest_positions(skeleton)[:, 1].min())
 
 
-def _slerp(r0: np.ndarray, r1: np.ndarray, s: float) -> np.ndarray:
-    return r0 @ rotation_exp(s * rotation_log(r0.T @ r1))
+def _multiply(p, q):
+    """Hamilton product of quaternions given as (w, x, y, z) tuples of floats."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw)
+
+
+def _key_rotation(quat_a, quat_b, turn_deg: float, s: float) -> np.ndarray:
+    """The slerp at ``s`` from A to B turned by ``turn_deg`` about the vertical: the
+    rotation ``A exp(s log(A^T Ry(turn) B))`` (3, 3), the short way round, worked on
+    unit quaternions (w, x, y, z) in plain floats: a handful of scalar operations
+    instead of a matrix logarithm and exponential of one matrix each."""
+    half_turn = 0.5 * math.radians(turn_deg)
+    b = _multiply((math.cos(half_turn), 0.0, math.sin(half_turn), 0.0), tuple(quat_b))
+    aw, ax, ay, az = quat_a
+    r = _multiply((aw, -ax, -ay, -az), b)
+    if r[0] < 0.0:
+        r = tuple(-c for c in r)
+    sine = math.sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3])
+    if sine > 1e-12:
+        half = s * math.atan2(sine, r[0])
+        f = math.sin(half) / sine
+        step = (math.cos(half), f * r[1], f * r[2], f * r[3])
+    else:
+        step = (1.0, 0.0, 0.0, 0.0)
+    w, x, y, z = _multiply((aw, ax, ay, az), step)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+@functools.lru_cache(maxsize=64)
+def _spline_weights(k1: int, k2: int, frames: int) -> np.ndarray:
+    """The root splines' weights (L, k1 + 1 + k2): key frames at the last ``k1`` frames
+    of clip 1 (A at 0), the key at the window's middle and the first ``k2`` of clip 2
+    (B at L + 1), evaluated at the window's frames 1 .. L."""
+    n_steps = frames + 1
+    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
+    return spline_weights(times, np.arange(1, frames + 1, dtype=float))
 
 
 def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
@@ -135,11 +177,14 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     # their fixed overhead, not their arithmetic).
     rotations = euler_to_matrix(np.concatenate([before[-k1:, 3:], after[:, 3:]]), order)
     rot_before, rot_after = rotations[:k1], rotations[k1:]
+    quat_a, quat_b = matrix_to_quaternion(rotations[k1 - 1:k1 + 1]).tolist()
     turn = 0.0
     if align_heading:
-        heading_a, heading_b = heading_deg(rotations[k1 - 1:k1 + 1])
+        heading_a, heading_b = _heading_of_quaternion(np.array([quat_a, quat_b]))
         turn = float(wrap_deg(heading_a - heading_b))
-    turn_matrix = axis_rotation(turn, "Y")
+    theta = np.deg2rad(turn)
+    c, s = np.cos(theta), np.sin(theta)
+    turn_matrix = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # axis_rotation Y
     rot_after = turn_matrix @ rot_after
 
     # Clip 2's translation relative to B, turned with it.
@@ -156,19 +201,18 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     new_after[:, _HORIZONTAL] = path[frames] + relative[:, _HORIZONTAL]
     new_after[:, 1] = after[:, 1]
 
-    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
-    query = np.arange(1, frames + 1, dtype=float)
 
     key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
-    heights = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
-    window[:, 1] = keyframe_spline(times, heights[:, None], query)[:, 0]
-
-    key_rot = _slerp(rot_before[-1], rot_after[0], alpha)
+    key_rot = _key_rotation(quat_a, quat_b, turn, alpha)
     context_rots = np.concatenate([rot_before, rot_after[:k2]])
     vectors = rotation_log(key_rot.T @ context_rots)
-    vectors = np.concatenate([vectors[:k1], np.zeros((1, 3)), vectors[k1:]])
-    window_vectors = keyframe_spline(times, vectors, query)
-    window_rots = key_rot @ rotation_exp(window_vectors)
+    # Height and rotation vector through the same key times: one spline.
+    keys = np.zeros((k1 + 1 + k2, 4))
+    keys[:, 0] = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
+    keys[:k1, 1:], keys[k1 + 1:, 1:] = vectors[:k1], vectors[k1:]
+    splined = _spline_weights(k1, k2, frames) @ keys
+    window[:, 1] = splined[:, 0]
+    window_rots = key_rot @ rotation_exp(splined[:, 1:])
 
     euler = continuous_euler_deg(np.concatenate([window_rots, rot_after]), order,
                                  before[-1, 3:])
