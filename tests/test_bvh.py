@@ -218,3 +218,44 @@ def test_other_skeletons_are_refused_naming_the_file(catalog, bvh_dir):
         with pytest.raises(DataFileError, match="not a CMU 31-joint BVH") as info:
             retarget_cmu(read_bvh(bvh_dir / name), catalog.skeleton("05"))
         assert info.value.path.endswith(name)
+
+
+def test_a_transition_written_as_bvh_stands_upright_in_an_independent_reader(data_dir,
+                                                                             tmp_path):
+    """`upm transition --out t.bvh`, read by the `bvh` package with plain forward kinematics
+    (Y up, as DCC tools import BVH): on every frame the head is above the hips, the hips
+    above both feet, and the feet on a floor near Y = 0."""
+    bvh_package = pytest.importorskip("bvh")
+    from scipy.spatial.transform import Rotation
+
+    from upm.cli import main
+
+    out = tmp_path / "t.bvh"
+    assert main(["transition", "--data", str(data_dir), "--method", "linear", "--from",
+                 "02_01@200", "--to", "02_03@20", "--out", str(out)]) == 0
+    parsed = bvh_package.Bvh(out.read_text())
+    names = parsed.get_joints_names()
+    y = {name: np.empty(parsed.nframes) for name in ("root", "head", "lfoot", "rfoot")}
+    for t in range(parsed.nframes):
+        world = {}
+        for name in names:
+            channels = parsed.joint_channels(name)
+            rot = dict(zip(channels, parsed.frame_joint_channels(t, name, channels),
+                           strict=True))
+            order = "".join(c[0] for c in channels if c.endswith("rotation"))
+            local = Rotation.from_euler(order, [rot[f"{a}rotation"] for a in order],
+                                        degrees=True)
+            offset = np.array([float(v) for v in parsed.joint_offset(name)])
+            if "Xposition" in rot:
+                offset = np.array([rot["Xposition"], rot["Yposition"], rot["Zposition"]])
+            parent = parsed.joint_parent(name)
+            if parent is None:
+                world[name] = (local, offset)
+            else:
+                prot, ppos = world[parent.name]
+                world[name] = (prot * local, ppos + prot.apply(offset))
+        for name in y:
+            y[name][t] = world[name][1][1]
+    assert np.all(y["head"] > y["root"] + 30.0)  # cm
+    assert np.all(y["root"] > np.maximum(y["lfoot"], y["rfoot"]) + 30.0)
+    assert np.abs(np.minimum(y["lfoot"], y["rfoot"]).min()) < 20.0
