@@ -16,7 +16,8 @@ WINDOW_TAIL_S = 0.5
 CONTROLLERS = ("balance", "servo")
 
 
-def settings(tracking_modes=(), controller: str = "balance") -> dict:
+def settings(tracking_modes=(), controller: str = "balance",
+             search_budget: float | None = None) -> dict:
     """The thresholds and methods of the checks, JSON-ready (units in the names)."""
     from controller.contacts import SELF_COLLISION_DEPTH_M
     from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
@@ -46,13 +47,17 @@ def settings(tracking_modes=(), controller: str = "balance") -> dict:
             "driven_root": "free joint qpos/qvel set from the reference before every step",
             "free_controller": controller,
             "free_controller_method": (
-                "whole-body inverse-dynamics QP per physics step (floor contacts in "
-                "friction pyramids, no root force, joint strength limits), torque "
+                "reference with marker dropouts filled and standing frames on the "
+                "floor; whole-body inverse-dynamics QP per physics step (floor contacts "
+                "in friction pyramids, no root force, joint strength limits), torque "
                 "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
-                "every 0.5 s; controller.balance"
+                "every 0.5 s, a backtracking search over controller modes where the "
+                "character gets into trouble; controller.balance"
                 if controller == "balance" else "position servos alone (open loop)"),
             "body_error": "mean distance of the joint centres from the reference's, each "
                           "relative to its pelvis and heading (drift reported apart)",
+            "search_budget": (_budget(search_budget) if controller == "balance"
+                              else None),
             "window_free_lead_s": WINDOW_LEAD_S,
             "window_free_tail_s": WINDOW_TAIL_S,
         }
@@ -78,7 +83,14 @@ def motion_description(model, motion, model_path=None) -> dict:
     }
 
 
-def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False):
+def _budget(search_budget):
+    from controller.balance import SEARCH_BUDGET
+
+    return SEARCH_BUDGET if search_budget is None else float(search_budget)
+
+
+def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False,
+             search_budget: float | None = None):
     """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller``: a
     :class:`controller.balance_report.BalanceTracking` or a
     :class:`controller.tracking.Tracking`."""
@@ -89,13 +101,15 @@ def free_run(model, qpos, fps: float, controller: str = "balance", progress: boo
         raise ValueError(f"unknown controller {controller!r} (controllers: "
                          f"{', '.join(CONTROLLERS)})")
     if controller == "balance":
-        return balance_tracking(model, qpos, fps, progress=progress)
+        return balance_tracking(model, qpos, fps, progress=progress,
+                                search_budget=search_budget)
     return track_qpos(model, qpos, fps, "free")
 
 
 def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
                      tail_s: float = WINDOW_TAIL_S, controller: str = "balance",
-                     progress: bool = False) -> list[dict]:
+                     progress: bool = False,
+                     search_budget: float | None = None) -> list[dict]:
     """Per window, a free-root simulation from the reference state ``lead_s`` before the
     window to ``tail_s`` after it: does the character get through it standing?
 
@@ -116,7 +130,8 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
         w0, w1, _ = window.indices(n)
         a = max(0, w0 - round(lead_s * motion.fps))
         b = min(n, w1 + round(tail_s * motion.fps))
-        run = free_run(model, qpos[a:b], motion.fps, controller)
+        run = free_run(model, qpos[a:b], motion.fps, controller,
+                       search_budget=search_budget)
         inside = slice(w0 - a, w1 - a)
         fall_frame = run.run.fall_frame if controller == "balance" else run.fall_frame
         fall = None if fall_frame is None else a + fall_frame
@@ -134,7 +149,8 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
 
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
-            model_path=None, controller: str = "balance", progress: bool = False):
+            model_path=None, controller: str = "balance", progress: bool = False,
+            search_budget: float | None = None):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -161,6 +177,8 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
         The free-root controller (:data:`CONTROLLERS`): ``"balance"`` or ``"servo"``.
     progress : bool
         Progress bars for the simulations.
+    search_budget : float, optional
+        The balance controller's search budget (``controller.balance.follow``).
 
     Returns
     -------
@@ -179,13 +197,14 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     validity = check_motion(model, motion, windows)
     residual = root_residual(model, to_qpos(model, motion), motion.fps) if dynamics else None
     tracking = {mode: (free_run(model, to_qpos(model, motion), motion.fps, controller,
-                                progress) if mode == "free" else track(model, motion, mode))
+                                progress, search_budget)
+                       if mode == "free" else track(model, motion, mode))
                 for mode in tracking_modes}
     per_window = (window_free_runs(model, motion, windows, controller=controller,
-                                   progress=progress)
+                                   progress=progress, search_budget=search_budget)
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
-                          settings=settings(tuple(tracking_modes), controller),
+                          settings=settings(tuple(tracking_modes), controller, search_budget),
                           residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)

@@ -243,7 +243,7 @@ def _torque_range(model) -> np.ndarray:
 
 
 def follow(model, reference_qpos, fps: float, *, seed: int = 0,
-           progress: bool = False) -> BalanceRun:
+           progress: bool = False, search_budget: float | None = None) -> BalanceRun:
     """Simulate the free-root humanoid balancing while it follows a reference.
 
     Parameters
@@ -258,6 +258,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         Recorded; the controller is deterministic.
     progress : bool
         Show a progress bar (tqdm, off when not a terminal).
+    search_budget : float, optional
+        The search's budget in multiples of the reference's physics steps (default
+        :data:`SEARCH_BUDGET`; 0: no search).
 
     Returns
     -------
@@ -343,7 +346,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     diverged = None
     steps = 0
     external = 0.0
-    search = _Search(sim, n_frames, fps, substeps, ref_pelvis, pelvis_body)
+    budget = SEARCH_BUDGET if search_budget is None else float(search_budget)
+    if not (math.isfinite(budget) and budget >= 0):
+        raise ValueError(f"the search budget must be a number >= 0, not {search_budget!r}")
+    search = _Search(sim, n_frames, fps, substeps, ref_pelvis, pelvis_body, budget)
     selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
     selected = {}
@@ -548,12 +554,12 @@ class _Search:
     """
 
     def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_pelvis,
-                 pelvis_body: int):
+                 pelvis_body: int, budget: float = SEARCH_BUDGET):
         self.sim, self.n_frames = sim, n_frames
         self.every = max(1, int(round(SEGMENT_S * fps)))
         self.sticky = int(round(STICKY_S / SEGMENT_S))
         self.ref_pelvis, self.pelvis_body = ref_pelvis, pelvis_body
-        self.budget_steps = SEARCH_BUDGET * (n_frames - 1) * substeps
+        self.budget_steps = budget * (n_frames - 1) * substeps
         self.choice: dict[int, int] = {}
         self.saved: dict[int, object] = {}
         self.quiet_until = 0

@@ -188,3 +188,24 @@ def test_servo_controller_is_still_available(tmp_path, data_dir):
     report = json.loads(out.read_text())
     assert report["settings"]["tracking"]["free_controller"] == "servo"
     assert "body_error_mm_mean" not in report["totals"]["tracking"]["free"]
+
+
+def test_search_budget_is_recorded_and_checked(tmp_path, data_dir, capsys):
+    out = tmp_path / "b.json"
+    assert main(["simulate", "--data", str(data_dir), "--method", "linear",
+                 "--sequence", "02_01@0:60", "--modes", "free", "--no-window-runs",
+                 "--search-budget", "0", "--report", str(out)]) == 0
+    report = json.loads(out.read_text())
+    assert report["settings"]["tracking"]["search_budget"] == 0.0
+    free = report["totals"]["tracking"]["free"]
+    assert free["search_retries"] == 0 and free["simulated_steps"] == free["steps"]
+    capsys.readouterr()
+    for args, message in [(["--search-budget", "-1"], "from 0 to 1000"),
+                          (["--search-budget", "nan"], "from 0 to 1000"),
+                          (["--search-budget", "2", "--controller", "servo"],
+                           "the balance controller's")]:
+        assert main(["simulate", "--data", str(data_dir), "--method", "linear",
+                     "--sequence", "02_01@0:60", "--report", str(tmp_path / "x.json"), *args]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1
+        assert not (tmp_path / "x.json").exists()

@@ -33,6 +33,8 @@ Example:
 
 from __future__ import annotations
 
+import math
+
 HELP = "drive the humanoid with clips joined by transitions; report physical validity"
 
 RENDER_CHOICES = ("driven", "free", "reference")
@@ -56,6 +58,11 @@ def configure(parser) -> None:
     parser.add_argument("--controller", choices=["balance", "servo"], default="balance",
                         help="the free-root controller: the balance controller (default) "
                              "or the position servos alone")
+    parser.add_argument("--search-budget", metavar="X", type=float, default=None,
+                        help="the balance controller's backtracking search may simulate "
+                             "up to X times the sequence's physics steps in all (default "
+                             f"{_default_budget():g}; 0: no search; more carries harder "
+                             "sequences through at more cost)")
     parser.add_argument("--amc", metavar="S.amc|S.bvh", default=None,
                         help="write the free-root simulated motion as AMC or BVH, by the "
                              "extension (needs free in --modes)")
@@ -75,6 +82,12 @@ def configure(parser) -> None:
                              "itself above, the simulation below (the paper's Fig. 11/12)")
     parser.add_argument("--viewer", action="store_true",
                         help="play it in MuJoCo's interactive viewer (needs a display)")
+
+
+def _default_budget() -> float:
+    from controller.balance import SEARCH_BUDGET
+
+    return SEARCH_BUDGET
 
 
 def run(args) -> int:
@@ -100,6 +113,13 @@ def run(args) -> int:
     if args.control and args.controller != "balance":
         raise UsageError("--control records the balance controller: use --controller "
                          "balance")
+    if args.search_budget is not None:
+        if not (math.isfinite(args.search_budget) and 0 <= args.search_budget <= 1000):
+            raise UsageError(f"--search-budget {args.search_budget:g}: use a number from 0 "
+                             "to 1000")
+        if args.controller != "balance":
+            raise UsageError("--search-budget is the balance controller's: use --controller "
+                             "balance")
     if args.amc:
         from upm.motion_io import check_motion_path
 
@@ -129,7 +149,8 @@ def run(args) -> int:
         model, motion, kind="simulate", windows=sequence.windows, window_meta=window_meta,
         pieces=[(str(ref), part) for ref, part in zip(refs, sequence.pieces, strict=True)],
         tracking_modes=tuple(args.modes), window_free=args.window_runs,
-        model_path=model_path, controller=args.controller, progress=True)
+        model_path=model_path, controller=args.controller, progress=True,
+        search_budget=args.search_budget)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
                           "map": args.map, "align_heading": args.align_heading}
