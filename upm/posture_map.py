@@ -31,10 +31,10 @@ import time
 
 import numpy as np
 
-from upm.angular_search import AngularIndex
 from upm.class_maps import ClassMaps, load_map
 from upm.errors import DataFileError, UsageError
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
+from upm.torus_tree import nearest_neuron
 from upm.upm_training import train_upm_classes
 
 __all__ = ["UniformPostureMap", "default_radius_deg", "load_map"]
@@ -64,7 +64,7 @@ def default_radius_deg(samples_deg, seed: int = 0) -> float:
     x = np.asarray(samples_deg, dtype=float)
     rng = np.random.default_rng(seed)
     sketch = x[rng.choice(len(x), sketch_size(len(x)), replace=False)]
-    _, dist_sq = AngularIndex(sketch).nearest(x)
+    _, dist_sq = nearest_neuron(x, sketch)
     return max(float(np.sqrt(np.quantile(dist_sq, RADIUS_QUANTILE))), 1e-6)
 
 

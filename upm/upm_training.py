@@ -410,6 +410,7 @@ def _train_one(job: tuple) -> ClassTrainingResult:
     from dataclasses import replace
 
     from upm.posture_map import default_radius_deg
+    from upm.torus_tree import nearest_neuron
 
     samples, radius, neighbourhood, kwargs = job
     if radius is None:
@@ -417,7 +418,7 @@ def _train_one(job: tuple) -> ClassTrainingResult:
     if neighbourhood is None:
         neighbourhood = radius
     result = train_upm_class(samples, radius, neighbourhood, **kwargs)
-    _, dist_sq = AngularIndex(wrap_deg(result.neurons_deg)).nearest(samples)
+    _, dist_sq = nearest_neuron(samples, result.neurons_deg)
     distance = np.sqrt(dist_sq)
     return replace(result, radius_deg=float(radius), neighbourhood_deg=float(neighbourhood),
                    quantisation_error_deg=(float(distance.mean()), float(distance.max())))
