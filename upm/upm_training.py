@@ -30,8 +30,13 @@ on the circle embedding and a neighbour graph (every pair of neurons within
 the drift or the neurons born since grow too large. A sample's winner in the previous
 pass is a *hint*: if it lies at ``U`` from the sample, any nearer neuron lies within
 ``2 U`` of the hint (triangle inequality), so within ``2 U + 2 drift`` of it in the
-snapshot -- in its graph list when that is below ``graph_radius``. Other samples go to
-the KD-tree. Neighbourhoods (radius ``r``) come from the graph likewise.
+snapshot -- in its graph list when that is below ``graph_radius`` (scanned by a compiled
+loop, :mod:`upm.graph_search`). A sample without a usable hint takes as hint its nearest
+neuron at the snapshot positions (the compiled search of :mod:`upm.torus_tree`, built
+on the snapshot when first needed); the few still out of the graph's reach go to the
+KD-tree. Neighbourhoods (radius ``r``) come from the graph likewise. Every path is exact
+and measures the winner's distance with numpy, so the neurons are those of the numpy
+search before it, bit for bit (tested against a checksum).
 """
 
 from __future__ import annotations
@@ -102,23 +107,6 @@ class _GrowingMap:
         self.weights[rows] = wrap_deg(self.weights[rows] + delta_deg)
 
 
-def _segment_min(values: np.ndarray, segment: np.ndarray, n_segments: int):
-    """Position of the minimum of ``values`` within each segment id (-1 if empty; the
-    first position among equal minima). ``segment`` is sorted (the graph's rows come in
-    order), so each segment is a run: a ``reduceat`` instead of a sort."""
-    ids = np.arange(n_segments)
-    starts = np.searchsorted(segment, ids)
-    counts = np.searchsorted(segment, ids, side="right") - starts
-    filled = counts > 0
-    pos = np.full(n_segments, -1)
-    if not filled.any():
-        return pos
-    least = np.minimum.reduceat(values, starts[filled])
-    at_min = np.flatnonzero(values == np.repeat(least, counts[filled]))
-    pos[filled] = at_min[np.searchsorted(segment[at_min], ids[filled])]
-    return pos
-
-
 class _Snapshot:
     """The map at one moment: a KD-tree index and a neighbour graph of its neurons.
 
@@ -146,6 +134,16 @@ class _Snapshot:
         self.indptr = np.searchsorted(ci, np.arange(self.size + 1))
         self.indices = ni
         self.dist = dist
+        self._forest = None
+
+    def nearest_then(self, x: np.ndarray) -> np.ndarray:
+        """Each row's nearest neuron at the snapshot positions (compiled search; built
+        on first use)."""
+        from upm.torus_tree import TorusForest
+
+        if self._forest is None:
+            self._forest = TorusForest([self.weights0], [slice(0, self.weights0.shape[1])])
+        return self._forest.nearest(x)[0][:, 0]
 
 
 class _MapSearch:
@@ -198,19 +196,12 @@ class _MapSearch:
         s, w = self.snap, self.growing.weights
         best = np.full(len(x), -1)
         best_sq = np.full(len(x), np.inf)
-        hinted = np.flatnonzero((hint >= 0) & (hint < s.size))
-        hinted = hinted[self.anchored[hint[hinted]]]
-        if len(hinted):
-            h = hint[hinted]
-            reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
-            ok = reach <= s.radius
-            hinted, h, reach = hinted[ok], h[ok], reach[ok]
-            row, cand = self._graph_pairs(np.arange(len(hinted)), h, reach)
-            sq = rowwise_sq_deg(x[hinted][row], w[cand])
-            pos = _segment_min(sq, row, len(hinted))
-            best[hinted] = cand[pos]
-            best_sq[hinted] = sq[pos]
+        self._via_graph(x, np.arange(len(x)), hint, best, best_sq)
         cold = np.flatnonzero(best < 0)
+        if len(cold):
+            # A hint for the others: their nearest neuron as it stood at the snapshot.
+            self._via_graph(x, cold, s.nearest_then(x[cold]), best, best_sq)
+            cold = cold[best[cold] < 0]
         if len(cold):
             best[cold], best_sq[cold] = s.index.nearest(x[cold])
         if len(self.extras):
@@ -221,6 +212,27 @@ class _MapSearch:
             best[closer] = self.extras[j[closer]]
             best_sq[closer] = j_sq[closer]
         return best, best_sq
+
+    def _via_graph(self, x, rows, hint, best, best_sq) -> None:
+        """Fill ``best``, ``best_sq`` at the ``rows`` whose hint (a neuron index or -1,
+        one per row) is anchored and near enough that the graph holds every neuron that
+        may be nearer; leave the others at -1."""
+        s, w = self.snap, self.growing.weights
+        ok = (hint >= 0) & (hint < s.size)
+        ok[ok] = self.anchored[hint[ok]]
+        hinted, h = rows[ok], hint[ok]
+        if not len(hinted):
+            return
+        reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
+        ok = reach <= s.radius
+        hinted, h, reach = hinted[ok], h[ok], reach[ok]
+        from upm.graph_search import nearest_in_lists
+
+        found = np.empty(len(hinted), dtype=np.intp)
+        xs = x[hinted]
+        nearest_in_lists(xs, w, h, reach, s.indptr, s.indices, s.dist, found)
+        best[hinted] = found
+        best_sq[hinted] = rowwise_sq_deg(xs, w[found])  # numpy's rounding, as before
 
     def neighbourhoods(self, centres: np.ndarray, radius: float):
         """(centre position, neuron) pairs within ``radius`` of neurons ``centres``,
