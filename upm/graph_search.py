@@ -16,6 +16,7 @@ Imported only when a map is trained.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 
@@ -46,3 +47,21 @@ def nearest_in_lists(x, weights, hint, reach, indptr, indices, dist, best):
                 best_sq = total
                 pick = n
         best[i] = pick
+
+
+@njit(cache=True, nogil=True)
+def pair_distances(weights, first, second, out):
+    """Wrapped distance of neurons ``first[p]`` and ``second[p]`` of ``weights`` (K, D)
+    (in [-180, 180)) for each pair ``p``, into ``out``: the graph's edge lengths."""
+    width = weights.shape[1]
+    for p in range(first.shape[0]):
+        a, b = first[p], second[p]
+        total = 0.0
+        for d in range(width):
+            v = weights[a, d] - weights[b, d]
+            if v >= 180.0:
+                v -= 360.0
+            elif v < -180.0:
+                v += 360.0
+            total += v * v
+        out[p] = np.sqrt(total)

@@ -115,15 +115,20 @@ class _Snapshot:
     """
 
     def __init__(self, weights: np.ndarray, radius: float):
+        from upm.graph_search import pair_distances
+
         self.weights0 = weights.copy()
         self.size = len(weights)
         self.radius = radius
         self.index = AngularIndex(self.weights0)
         # Chord <= wrapped distance: the chord pairs are a superset; keep the exact ones.
         pairs = self.index.tree.query_pairs(radius, output_type="ndarray")
-        pair_dist = np.sqrt(rowwise_sq_deg(self.weights0[pairs[:, 0]],
-                                           self.weights0[pairs[:, 1]]))
-        pairs, pair_dist = pairs[pair_dist <= radius], pair_dist[pair_dist <= radius]
+        first, second = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+        pair_dist = np.empty(len(pairs))
+        pair_distances(self.weights0, first, second, pair_dist)
+        # Summed DOF by DOF (not as numpy sums): a margin keeps every pair within radius.
+        keep = pair_dist <= radius * (1.0 + 1e-12)
+        pairs, pair_dist = pairs[keep], pair_dist[keep]
         selves = np.arange(self.size)
         ci = np.concatenate([pairs[:, 0], pairs[:, 1], selves])
         ni = np.concatenate([pairs[:, 1], pairs[:, 0], selves])
