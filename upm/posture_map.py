@@ -187,7 +187,8 @@ class UniformPostureMap(ClassMaps):
             class_stats[c] = {"radius_deg": result.radius_deg,
                               "neighbourhood_deg": result.neighbourhood_deg,
                               "births_per_pass": list(result.births_per_pass),
-                              "train_seconds": result.seconds}
+                              "train_seconds": result.seconds,
+                              "train_cpu_seconds": result.cpu_seconds}
         p["radius_deg"] = {c: results[c].radius_deg for c in CLASS_NAMES}
         p["neighbourhood_deg"] = {c: results[c].neighbourhood_deg for c in CLASS_NAMES}
         self._set_trained(neurons, x, clip_names, time.perf_counter() - start_s, class_stats,

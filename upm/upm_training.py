@@ -72,6 +72,10 @@ class ClassTrainingResult:
     quantisation_error_deg : (float, float) or None
         Mean and largest wrapped distance from the training samples to their nearest
         neuron (:func:`train_upm_classes` fills it in).
+    cpu_seconds : float
+        CPU time of the process for the whole job of :func:`train_upm_classes` (default
+        R, training, quantisation error; NaN until it fills it in): on a loaded machine
+        the figure to compare, where wall-clock time depends on the other work.
     """
 
     neurons_deg: np.ndarray
@@ -80,6 +84,7 @@ class ClassTrainingResult:
     radius_deg: float = float("nan")
     neighbourhood_deg: float = float("nan")
     quantisation_error_deg: tuple[float, float] | None = None
+    cpu_seconds: float = float("nan")
 
 
 class _GrowingMap:
@@ -429,6 +434,7 @@ def _train_one(job: tuple) -> ClassTrainingResult:
     from upm.posture_map import default_radius_deg
     from upm.torus_tree import nearest_neuron
 
+    start_cpu_s = time.process_time()
     samples, radius, neighbourhood, kwargs = job
     if radius is None:
         radius = default_radius_deg(samples, seed=kwargs.get("seed", 0))
@@ -438,7 +444,8 @@ def _train_one(job: tuple) -> ClassTrainingResult:
     _, dist_sq = nearest_neuron(samples, result.neurons_deg)
     distance = np.sqrt(dist_sq)
     return replace(result, radius_deg=float(radius), neighbourhood_deg=float(neighbourhood),
-                   quantisation_error_deg=(float(distance.mean()), float(distance.max())))
+                   quantisation_error_deg=(float(distance.mean()), float(distance.max())),
+                   cpu_seconds=time.process_time() - start_cpu_s)
 
 
 def train_upm_classes(jobs: dict[str, tuple], workers: int | None = None,
