@@ -227,6 +227,8 @@ class _MapSearch:
         """Fill ``best``, ``best_sq`` at the ``rows`` whose hint (a neuron index or -1,
         one per row) is anchored and near enough that the graph holds every neuron that
         may be nearer; leave the others at -1."""
+        from upm.graph_search import nearest_in_lists
+
         s, w = self.snap, self.growing.weights
         ok = (hint >= 0) & (hint < s.size)
         ok[ok] = self.anchored[hint[ok]]
@@ -236,8 +238,6 @@ class _MapSearch:
         reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
         ok = reach <= s.radius
         hinted, h, reach = hinted[ok], h[ok], reach[ok]
-        from upm.graph_search import nearest_in_lists
-
         found = np.empty(len(hinted), dtype=np.intp)
         xs = x[hinted]
         nearest_in_lists(xs, w, h, reach, s.indptr, s.indices, s.dist, found)
