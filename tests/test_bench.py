@@ -31,6 +31,10 @@ def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
     assert report["blas_threads"] == [1]
     maps = report["benchmarks"]["posture_map"]
     assert maps["upm_train_identical_neurons"] is True
+    # the busier of two workers: at least the slowest class, at most all of them
+    class_cpu = [c["train_cpu_s"] for c in maps["classes"].values()]
+    assert 0 < max(class_cpu) <= maps["upm_train_cpu_s_busier_of_two_workers"]
+    assert maps["upm_train_cpu_s_busier_of_two_workers"] <= maps["upm_train_cpu_s"]
     for kind in ("single", "batched"):
         low, high = maps[f"key_posture_ratio_{kind}_range"]
         assert low <= maps[f"key_posture_ratio_{kind}"] <= high

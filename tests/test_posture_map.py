@@ -251,6 +251,42 @@ def test_classes_trained_in_parallel_equal_trained_in_order(small_map):
         assert parallel.stats[c]["births_per_pass"] == in_order.stats[c]["births_per_pass"]
 
 
+#: sha256 of the small map (02_02, 09_06, 35_01; default parameters): per class its
+#: neurons' bytes, then R, the quantisation error (mean, max) and the births per pass as
+#: float64. Computed by the training before its search was sped up (issue 13): a faster
+#: training must give these bits.
+SMALL_MAP_SHA256 = "15c2be40cf78cb0007ccd95803b927e09c419c5488d84ff29f6470c972b2af27"
+
+
+def test_small_map_is_bit_for_bit_the_one_trained_before_the_speed_ups(small_map):
+    import hashlib
+
+    upm, _ = small_map
+    digest = hashlib.sha256()
+    for c in CLASS_NAMES:
+        s = upm.stats[c]
+        digest.update(upm.neurons[c].tobytes())
+        digest.update(np.array([s["radius_deg"], s["quantisation_error_mean_deg"],
+                                s["quantisation_error_max_deg"]] + s["births_per_pass"],
+                               dtype=float).tobytes())
+    assert digest.hexdigest() == SMALL_MAP_SHA256
+
+
+def test_compiled_nearest_neuron_is_the_angular_index_bit_for_bit(small_map):
+    """What the training's default R and quantisation error now use, against the search
+    they used before, on real frames: same neurons, same distance bits."""
+    from upm.torus_tree import nearest_neuron
+
+    upm, x = small_map
+    for c in CLASS_NAMES:
+        sub = x[:, CLASS_SLICES[c]]
+        for neurons in (upm.neurons[c], sub[::7]):
+            index, dist_sq = nearest_neuron(sub, neurons)
+            ref_index, ref_sq = AngularIndex(neurons).nearest(sub)
+            np.testing.assert_array_equal(index, ref_index)
+            np.testing.assert_array_equal(dist_sq, ref_sq)
+
+
 def _is_neuron(upm, posture):
     return all(np.any(np.all(upm.neurons[c] == posture[CLASS_SLICES[c]], axis=1))
                for c in CLASS_NAMES)

@@ -31,10 +31,10 @@ import time
 
 import numpy as np
 
-from upm.angular_search import AngularIndex
 from upm.class_maps import ClassMaps, load_map
 from upm.errors import DataFileError, UsageError
 from upm.skeleton import CLASS_NAMES, CLASS_SLICES
+from upm.torus_tree import nearest_neuron
 from upm.upm_training import train_upm_classes
 
 __all__ = ["UniformPostureMap", "default_radius_deg", "load_map"]
@@ -64,7 +64,7 @@ def default_radius_deg(samples_deg, seed: int = 0) -> float:
     x = np.asarray(samples_deg, dtype=float)
     rng = np.random.default_rng(seed)
     sketch = x[rng.choice(len(x), sketch_size(len(x)), replace=False)]
-    _, dist_sq = AngularIndex(sketch).nearest(x)
+    _, dist_sq = nearest_neuron(x, sketch)
     return max(float(np.sqrt(np.quantile(dist_sq, RADIUS_QUANTILE))), 1e-6)
 
 
@@ -187,7 +187,8 @@ class UniformPostureMap(ClassMaps):
             class_stats[c] = {"radius_deg": result.radius_deg,
                               "neighbourhood_deg": result.neighbourhood_deg,
                               "births_per_pass": list(result.births_per_pass),
-                              "train_seconds": result.seconds}
+                              "train_seconds": result.seconds,
+                              "train_cpu_seconds": result.cpu_seconds}
         p["radius_deg"] = {c: results[c].radius_deg for c in CLASS_NAMES}
         p["neighbourhood_deg"] = {c: results[c].neighbourhood_deg for c in CLASS_NAMES}
         self._set_trained(neurons, x, clip_names, time.perf_counter() - start_s, class_stats,

@@ -194,3 +194,34 @@ def _kernels():
     from upm import torus_kernels
 
     return torus_kernels
+
+
+def nearest_neuron(points_deg, neurons_deg) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest of one set of neurons to each point, by the compiled search.
+
+    The same answer as :meth:`upm.angular_search.AngularIndex.nearest`, bit for bit
+    (the distance is computed again the same way, with numpy), at about a tenth of its
+    time for many points and a thousand neurons or more.
+
+    Parameters
+    ----------
+    points_deg : array_like, shape (M, D)
+        Degrees (any range; wrapped).
+    neurons_deg : array_like, shape (K, D)
+        Degrees (any range; wrapped), ``K >= 1``.
+
+    Returns
+    -------
+    index : ndarray of int, shape (M,)
+    dist_sq : ndarray, shape (M,)
+        Squared wrapped distance to that neuron (degrees squared).
+    """
+    from upm.angles import wrap_deg
+    from upm.angular_search import rowwise_sq_deg
+
+    neurons = wrap_deg(np.asarray(neurons_deg, dtype=float))
+    points = wrap_deg(np.asarray(points_deg, dtype=float).reshape(-1, neurons.shape[1]))
+    index = TorusForest([neurons], [slice(0, neurons.shape[1])]).nearest(points)[0][:, 0]
+    # (M, 1, D) as AngularIndex computes it, so that the sums round the same way.
+    dist_sq = rowwise_sq_deg(points[:, None, :], neurons[index][:, None, :])[:, 0]
+    return index.astype(np.intp), dist_sq

@@ -30,8 +30,13 @@ on the circle embedding and a neighbour graph (every pair of neurons within
 the drift or the neurons born since grow too large. A sample's winner in the previous
 pass is a *hint*: if it lies at ``U`` from the sample, any nearer neuron lies within
 ``2 U`` of the hint (triangle inequality), so within ``2 U + 2 drift`` of it in the
-snapshot -- in its graph list when that is below ``graph_radius``. Other samples go to
-the KD-tree. Neighbourhoods (radius ``r``) come from the graph likewise.
+snapshot -- in its graph list when that is below ``graph_radius`` (scanned by a compiled
+loop, :mod:`upm.graph_search`). A sample without a usable hint takes as hint its nearest
+neuron at the snapshot positions (the compiled search of :mod:`upm.torus_tree`, built
+on the snapshot when first needed); the few still out of the graph's reach go to the
+KD-tree. Neighbourhoods (radius ``r``) come from the graph likewise. Every path is exact
+and measures the winner's distance with numpy, so the neurons are those of the numpy
+search before it, bit for bit (tested against a checksum).
 """
 
 from __future__ import annotations
@@ -67,6 +72,10 @@ class ClassTrainingResult:
     quantisation_error_deg : (float, float) or None
         Mean and largest wrapped distance from the training samples to their nearest
         neuron (:func:`train_upm_classes` fills it in).
+    cpu_seconds : float
+        CPU time of the process for the whole job of :func:`train_upm_classes` (default
+        R, training, quantisation error; NaN until it fills it in): on a loaded machine
+        the figure to compare, where wall-clock time depends on the other work.
     """
 
     neurons_deg: np.ndarray
@@ -75,6 +84,7 @@ class ClassTrainingResult:
     radius_deg: float = float("nan")
     neighbourhood_deg: float = float("nan")
     quantisation_error_deg: tuple[float, float] | None = None
+    cpu_seconds: float = float("nan")
 
 
 class _GrowingMap:
@@ -102,23 +112,6 @@ class _GrowingMap:
         self.weights[rows] = wrap_deg(self.weights[rows] + delta_deg)
 
 
-def _segment_min(values: np.ndarray, segment: np.ndarray, n_segments: int):
-    """Position of the minimum of ``values`` within each segment id (-1 if empty; the
-    first position among equal minima). ``segment`` is sorted (the graph's rows come in
-    order), so each segment is a run: a ``reduceat`` instead of a sort."""
-    ids = np.arange(n_segments)
-    starts = np.searchsorted(segment, ids)
-    counts = np.searchsorted(segment, ids, side="right") - starts
-    filled = counts > 0
-    pos = np.full(n_segments, -1)
-    if not filled.any():
-        return pos
-    least = np.minimum.reduceat(values, starts[filled])
-    at_min = np.flatnonzero(values == np.repeat(least, counts[filled]))
-    pos[filled] = at_min[np.searchsorted(segment[at_min], ids[filled])]
-    return pos
-
-
 class _Snapshot:
     """The map at one moment: a KD-tree index and a neighbour graph of its neurons.
 
@@ -127,15 +120,20 @@ class _Snapshot:
     """
 
     def __init__(self, weights: np.ndarray, radius: float):
+        from upm.graph_search import pair_distances
+
         self.weights0 = weights.copy()
         self.size = len(weights)
         self.radius = radius
         self.index = AngularIndex(self.weights0)
         # Chord <= wrapped distance: the chord pairs are a superset; keep the exact ones.
         pairs = self.index.tree.query_pairs(radius, output_type="ndarray")
-        pair_dist = np.sqrt(rowwise_sq_deg(self.weights0[pairs[:, 0]],
-                                           self.weights0[pairs[:, 1]]))
-        pairs, pair_dist = pairs[pair_dist <= radius], pair_dist[pair_dist <= radius]
+        first, second = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+        pair_dist = np.empty(len(pairs))
+        pair_distances(self.weights0, first, second, pair_dist)
+        # Summed DOF by DOF (not as numpy sums): a margin keeps every pair within radius.
+        keep = pair_dist <= radius * (1.0 + 1e-12)
+        pairs, pair_dist = pairs[keep], pair_dist[keep]
         selves = np.arange(self.size)
         ci = np.concatenate([pairs[:, 0], pairs[:, 1], selves])
         ni = np.concatenate([pairs[:, 1], pairs[:, 0], selves])
@@ -146,6 +144,16 @@ class _Snapshot:
         self.indptr = np.searchsorted(ci, np.arange(self.size + 1))
         self.indices = ni
         self.dist = dist
+        self._forest = None
+
+    def nearest_then(self, x: np.ndarray) -> np.ndarray:
+        """Each row's nearest neuron at the snapshot positions (compiled search; built
+        on first use)."""
+        from upm.torus_tree import TorusForest
+
+        if self._forest is None:
+            self._forest = TorusForest([self.weights0], [slice(0, self.weights0.shape[1])])
+        return self._forest.nearest(x)[0][:, 0]
 
 
 class _MapSearch:
@@ -198,19 +206,12 @@ class _MapSearch:
         s, w = self.snap, self.growing.weights
         best = np.full(len(x), -1)
         best_sq = np.full(len(x), np.inf)
-        hinted = np.flatnonzero((hint >= 0) & (hint < s.size))
-        hinted = hinted[self.anchored[hint[hinted]]]
-        if len(hinted):
-            h = hint[hinted]
-            reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
-            ok = reach <= s.radius
-            hinted, h, reach = hinted[ok], h[ok], reach[ok]
-            row, cand = self._graph_pairs(np.arange(len(hinted)), h, reach)
-            sq = rowwise_sq_deg(x[hinted][row], w[cand])
-            pos = _segment_min(sq, row, len(hinted))
-            best[hinted] = cand[pos]
-            best_sq[hinted] = sq[pos]
+        self._via_graph(x, np.arange(len(x)), hint, best, best_sq)
         cold = np.flatnonzero(best < 0)
+        if len(cold):
+            # A hint for the others: their nearest neuron as it stood at the snapshot.
+            self._via_graph(x, cold, s.nearest_then(x[cold]), best, best_sq)
+            cold = cold[best[cold] < 0]
         if len(cold):
             best[cold], best_sq[cold] = s.index.nearest(x[cold])
         if len(self.extras):
@@ -221,6 +222,27 @@ class _MapSearch:
             best[closer] = self.extras[j[closer]]
             best_sq[closer] = j_sq[closer]
         return best, best_sq
+
+    def _via_graph(self, x, rows, hint, best, best_sq) -> None:
+        """Fill ``best``, ``best_sq`` at the ``rows`` whose hint (a neuron index or -1,
+        one per row) is anchored and near enough that the graph holds every neuron that
+        may be nearer; leave the others at -1."""
+        from upm.graph_search import nearest_in_lists
+
+        s, w = self.snap, self.growing.weights
+        ok = (hint >= 0) & (hint < s.size)
+        ok[ok] = self.anchored[hint[ok]]
+        hinted, h = rows[ok], hint[ok]
+        if not len(hinted):
+            return
+        reach = 2.0 * np.sqrt(rowwise_sq_deg(x[hinted], w[h])) + 2.0 * self.drift
+        ok = reach <= s.radius
+        hinted, h, reach = hinted[ok], h[ok], reach[ok]
+        found = np.empty(len(hinted), dtype=np.intp)
+        xs = x[hinted]
+        nearest_in_lists(xs, w, h, reach, s.indptr, s.indices, s.dist, found)
+        best[hinted] = found
+        best_sq[hinted] = rowwise_sq_deg(xs, w[found])  # numpy's rounding, as before
 
     def neighbourhoods(self, centres: np.ndarray, radius: float):
         """(centre position, neuron) pairs within ``radius`` of neurons ``centres``,
@@ -410,17 +432,20 @@ def _train_one(job: tuple) -> ClassTrainingResult:
     from dataclasses import replace
 
     from upm.posture_map import default_radius_deg
+    from upm.torus_tree import nearest_neuron
 
+    start_cpu_s = time.process_time()
     samples, radius, neighbourhood, kwargs = job
     if radius is None:
         radius = default_radius_deg(samples, seed=kwargs.get("seed", 0))
     if neighbourhood is None:
         neighbourhood = radius
     result = train_upm_class(samples, radius, neighbourhood, **kwargs)
-    _, dist_sq = AngularIndex(wrap_deg(result.neurons_deg)).nearest(samples)
+    _, dist_sq = nearest_neuron(samples, result.neurons_deg)
     distance = np.sqrt(dist_sq)
     return replace(result, radius_deg=float(radius), neighbourhood_deg=float(neighbourhood),
-                   quantisation_error_deg=(float(distance.mean()), float(distance.max())))
+                   quantisation_error_deg=(float(distance.mean()), float(distance.max())),
+                   cpu_seconds=time.process_time() - start_cpu_s)
 
 
 def train_upm_classes(jobs: dict[str, tuple], workers: int | None = None,
