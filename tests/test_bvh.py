@@ -69,24 +69,23 @@ def test_amc_to_bvh_to_amc_gives_the_same_postures(catalog, tmp_path, clip):
     assert back.fps == pytest.approx(motion.fps)
 
 
-def test_an_independent_reader_finds_our_joints_within_a_millimetre(catalog, tmp_path):
-    bvh_package = pytest.importorskip("bvh")
+def _independent_joint_positions(parsed) -> dict:
+    """Joint positions (file units) of every frame of a file read by the ``bvh`` package,
+    by plain forward kinematics with scipy's rotations (each joint's own channel order):
+    ``{name: ndarray (T, 3)}``."""
     from scipy.spatial.transform import Rotation
 
-    motion = catalog.load("05_11").frames(0, 60)
-    write_bvh(tmp_path / "m.bvh", motion_to_bvh(motion))
-    parsed = bvh_package.Bvh((tmp_path / "m.bvh").read_text())
     names = parsed.get_joints_names()
-    assert names == list(motion.skeleton.bone_names)
-    _, ends_m = global_transforms(motion.skeleton, motion.posture_deg, motion.root)
-    world = {}
+    out = {name: np.empty((parsed.nframes, 3)) for name in names}
     for t in range(parsed.nframes):
+        world = {}
         for name in names:
             channels = parsed.joint_channels(name)
-            values = parsed.frame_joint_channels(t, name, channels)
-            rot = dict(zip(channels, values, strict=True))
-            local = Rotation.from_euler("ZYX", [rot["Zrotation"], rot["Yrotation"],
-                                                rot["Xrotation"]], degrees=True)
+            rot = dict(zip(channels, parsed.frame_joint_channels(t, name, channels),
+                           strict=True))
+            order = "".join(c[0] for c in channels if c.endswith("rotation"))
+            local = Rotation.from_euler(order, [rot[f"{a}rotation"] for a in order],
+                                        degrees=True)
             offset = np.array([float(v) for v in parsed.joint_offset(name)])
             if "Xposition" in rot:
                 offset = np.array([rot["Xposition"], rot["Yposition"], rot["Zposition"]])
@@ -96,10 +95,26 @@ def test_an_independent_reader_finds_our_joints_within_a_millimetre(catalog, tmp
             else:
                 prot, ppos = world[parent.name]
                 world[name] = (prot * local, ppos + prot.apply(offset))
-            b = motion.skeleton.bone_index(name)
-            if b:
-                start_m = ends_m[t, motion.skeleton.parents[b]]
-                assert np.linalg.norm(world[name][1] / 100.0 - start_m) < 1e-3, (t, name)
+            out[name][t] = world[name][1]
+    return out
+
+
+def test_an_independent_reader_finds_our_joints_within_a_millimetre(catalog, tmp_path):
+    bvh_package = pytest.importorskip("bvh")
+
+    motion = catalog.load("05_11").frames(0, 60)
+    write_bvh(tmp_path / "m.bvh", motion_to_bvh(motion))
+    parsed = bvh_package.Bvh((tmp_path / "m.bvh").read_text())
+    assert parsed.get_joints_names() == list(motion.skeleton.bone_names)
+    assert all(parsed.joint_channels(n)[-3:] == ["Zrotation", "Yrotation", "Xrotation"]
+               for n in parsed.get_joints_names())
+    _, ends_m = global_transforms(motion.skeleton, motion.posture_deg, motion.root)
+    positions = _independent_joint_positions(parsed)
+    for name, pos in positions.items():
+        b = motion.skeleton.bone_index(name)
+        if b:
+            start_m = ends_m[:, motion.skeleton.parents[b]]
+            assert np.linalg.norm(pos / 100.0 - start_m, axis=1).max() < 1e-3, name
 
 
 @pytest.mark.parametrize("text, message, line", [
@@ -226,36 +241,14 @@ def test_a_transition_written_as_bvh_stands_upright_in_an_independent_reader(dat
     (Y up, as DCC tools import BVH): on every frame the head is above the hips, the hips
     above both feet, and the feet on a floor near Y = 0."""
     bvh_package = pytest.importorskip("bvh")
-    from scipy.spatial.transform import Rotation
 
     from upm.cli import main
 
     out = tmp_path / "t.bvh"
     assert main(["transition", "--data", str(data_dir), "--method", "linear", "--from",
                  "02_01@200", "--to", "02_03@20", "--out", str(out)]) == 0
-    parsed = bvh_package.Bvh(out.read_text())
-    names = parsed.get_joints_names()
-    y = {name: np.empty(parsed.nframes) for name in ("root", "head", "lfoot", "rfoot")}
-    for t in range(parsed.nframes):
-        world = {}
-        for name in names:
-            channels = parsed.joint_channels(name)
-            rot = dict(zip(channels, parsed.frame_joint_channels(t, name, channels),
-                           strict=True))
-            order = "".join(c[0] for c in channels if c.endswith("rotation"))
-            local = Rotation.from_euler(order, [rot[f"{a}rotation"] for a in order],
-                                        degrees=True)
-            offset = np.array([float(v) for v in parsed.joint_offset(name)])
-            if "Xposition" in rot:
-                offset = np.array([rot["Xposition"], rot["Yposition"], rot["Zposition"]])
-            parent = parsed.joint_parent(name)
-            if parent is None:
-                world[name] = (local, offset)
-            else:
-                prot, ppos = world[parent.name]
-                world[name] = (prot * local, ppos + prot.apply(offset))
-        for name in y:
-            y[name][t] = world[name][1][1]
+    positions = _independent_joint_positions(bvh_package.Bvh(out.read_text()))
+    y = {name: positions[name][:, 1] for name in ("root", "head", "lfoot", "rfoot")}
     assert np.all(y["head"] > y["root"] + 30.0)  # cm
     assert np.all(y["root"] > np.maximum(y["lfoot"], y["rfoot"]) + 30.0)
     assert np.abs(np.minimum(y["lfoot"], y["rfoot"]).min()) < 20.0
