@@ -30,10 +30,10 @@ Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
 copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
 reference's height and upright. Where the character still gets into trouble (pelvis well
 below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
-runs the last segments again in other :data:`MODES` (placement gain, which swing-foot
-contacts the plan leans on) from their saved states. The controller's balance is thin
-(which walks it gets through changes with these choices), and the search buys robustness
-where it is needed, at the cost of the segments it runs again (``simulated_steps``).
+runs the last segments again in other :data:`MODES` (placement gain, swing clearance,
+which swing-foot contacts the plan leans on) from their saved states. The controller's
+balance is thin (which walks it gets through changes with these choices), and the search
+buys robustness where it is needed, at the cost of the segments it runs again (``simulated_steps``).
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run. The controller has no
@@ -65,6 +65,7 @@ import copy
 import math
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -83,13 +84,23 @@ DAMPING_RATIO = 1.0
 MAX_ACCELERATION = 300.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
+
+
+class Mode(NamedTuple):
+    """One way of running the controller (see :data:`MODES`)."""
+
+    placement_gain: float
+    swing_contacts_excluded: str
+    swing_clearance_m: float
+
+
 #: The controller's modes, tried in this order where the default leads to trouble: the
 #: foot-placement gain, which floor contacts of the foot the reference has in the air are
 #: not planned as support ("none"; "toes": a swing toe that scrapes the floor is not
 #: pinned to it; "foot": no contact of that foot), and the swing ankle's clearance above
 #: the reference's, metres (:mod:`controller.placement`). The first is the default.
-MODES = ((0.3, "none", 0.0), (0.3, "none", 0.04), (0.6, "none", 0.02), (0.3, "toes", 0.04),
-         (0.6, "toes", 0.04), (0.3, "foot", 0.04))
+MODES = (Mode(0.3, "none", 0.0), Mode(0.3, "none", 0.04), Mode(0.6, "none", 0.02),
+         Mode(0.3, "toes", 0.04), Mode(0.6, "toes", 0.04), Mode(0.3, "foot", 0.04))
 #: Foot-placement gains chosen among by short rollouts for the default mode ...
 SELECT_GAINS = (0.3, 0.6)
 #: ... every this many seconds ...
@@ -110,8 +121,6 @@ STICKY_S = 2.0
 SEARCH_BUDGET = 10.0
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
-#: Put every standing frame of the reference on the floor (:mod:`controller.grounding`).
-GROUND = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
@@ -272,7 +281,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.dropouts import fill_dropouts
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
-    from controller.grounding import ground_reference
+    from controller.grounding import floor_clearance, ground_reference
     from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
@@ -309,11 +318,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
     ref[:, 2] += height_shift
     smooth[:, 2] += height_shift
-    if GROUND:
-        # and every standing frame on the floor (controller.grounding)
-        down = FootPlacement(sim, ref, fps).ref_down
-        smooth, ground_shift = ground_reference(sim, smooth, fps, down)
-        ref[:, 2] += ground_shift
+    # and every standing frame on the floor (controller.grounding)
+    down = FootPlacement(sim, ref, fps).ref_down
+    smooth, ground_shift = ground_reference(sim, smooth, fps, down)
+    ref[:, 2] += ground_shift
     ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
     start = smooth[0].copy()
     start_qvel = ref_qvel[0].copy()
@@ -360,7 +368,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         t = 1
         while t < n_frames:
             search.enter(data, t)
-            gain, exclude, clearance = MODES[search.mode(t)]
+            gain, exclude, clearance = MODES[search.mode(t)]  # a Mode
             if selector is not None and search.mode(t) == 0:
                 # the default mode's gain, chosen by lookahead (once per start frame)
                 first = (t - 1) - (t - 1) % selector.every_frames
@@ -525,7 +533,7 @@ class _GainSelector:
             cost = 0.0
             for t in range(frame + 1, last + 1):
                 for k in range((t - 1) * control.substeps, t * control.substeps):
-                    control.step(scratch, k, gain, "none", MODES[0][2])
+                    control.step(scratch, k, gain, "none", MODES[0].swing_clearance_m)
                 if not np.all(np.isfinite(scratch.qpos)):
                     cost = math.inf
                     break
@@ -634,14 +642,12 @@ class _Search:
         self.quiet_until = self.n_frames if spent else max(t, best_t) + self.every
         if best_t <= t:
             return None
-        old, new = self.choice, best_choice
         differ = [j for j in range(self._segment(best_t) + 1)
-                  if self._mode_of(j) != self._mode_of(j, new)]
+                  if self._mode_of(j) != self._mode_of(j, best_choice)]
         first = differ[0] if differ else self._segment(t)
         if first not in self.saved:
-            self.choice = old
             return None
-        return self._restart(data, first, new, quiet=self.quiet_until)
+        return self._restart(data, first, best_choice, quiet=self.quiet_until)
 
     def _restart(self, data, segment: int, choice: dict, quiet: int = 0) -> int:
         import mujoco
@@ -739,21 +745,6 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
         "torque_peak_nm": stat(np.abs(run.torque_nm[up]).ravel(), np.max),
         "wall_s_per_sim_s": run.wall_s_per_sim_s,
     }
-
-
-def floor_clearance(model, data, qpos) -> float:
-    """Signed distance from the floor to the body's lowest point in state ``qpos``,
-    metres (negative: in the floor)."""
-    import mujoco
-
-    data.qpos[:] = qpos
-    mujoco.mj_kinematics(model, data)
-    floor = [g for g in range(model.ngeom)
-             if model.geom_bodyid[g] == 0 and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE]
-    if len(floor) != 1:
-        raise ValueError("the model needs exactly one floor plane")
-    return min(mujoco.mj_geomDistance(model, data, floor[0], g, 1.0, None)
-               for g in range(model.ngeom) if model.geom_bodyid[g] != 0)
 
 
 def _gains(nv: int):

@@ -31,9 +31,6 @@ FOOT_DOWN_SPEED_MPS = 0.8
 FOOT_DOWN_HEIGHT_M = 0.08
 #: Also keep the swing ankle at least at the reference's height (hip and knee).
 SWING_HEIGHT = True
-#: Compare with the reference's stance foot where the reference has it down, at the
-#: nearest such frame (not where it swings).
-NEAREST_DOWN = True
 #: Extra height of the swing ankle above the reference's while the reference swings it,
 #: metres (the default; the balance controller's modes choose their own).
 SWING_CLEARANCE_M = 0.0
@@ -174,8 +171,7 @@ class FootPlacement:
         # the reference's stance foot where the reference has it down, at the frame
         # nearest this one (a foot the character put down early or lifted late is
         # compared with where the reference lands it or last stood on it)
-        foot = self.ref_ankle[self._down_frame(frame, stance) if NEAREST_DOWN else frame,
-                              stance, :2]
+        foot = self.ref_ankle[self._down_frame(frame, stance), stance, :2]
         ref_offset = (self.ref_com[frame, :2] - foot) + tc * self.ref_com_vel[frame, :2]
         shift = (self.gain if gain is None else gain) * (sim_offset - ref_offset)
         norm = float(np.linalg.norm(shift))
