@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from upm.torus_kernels import wrap_difference
+
 
 @njit(cache=True, nogil=True)
 def nearest_in_lists(x, weights, hint, reach, indptr, indices, dist, best):
@@ -35,11 +37,7 @@ def nearest_in_lists(x, weights, hint, reach, indptr, indices, dist, best):
             n = indices[e]
             total = 0.0
             for d in range(width):
-                v = x[i, d] - weights[n, d]
-                if v >= 180.0:
-                    v -= 360.0
-                elif v < -180.0:
-                    v += 360.0
+                v = wrap_difference(x[i, d] - weights[n, d])
                 total += v * v
                 if total > best_sq:
                     break
@@ -58,10 +56,6 @@ def pair_distances(weights, first, second, out):
         a, b = first[p], second[p]
         total = 0.0
         for d in range(width):
-            v = weights[a, d] - weights[b, d]
-            if v >= 180.0:
-                v -= 360.0
-            elif v < -180.0:
-                v += 360.0
+            v = wrap_difference(weights[a, d] - weights[b, d])
             total += v * v
         out[p] = np.sqrt(total)

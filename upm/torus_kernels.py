@@ -27,6 +27,17 @@ def _wrap(x):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def wrap_difference(x):
+    """A difference of two angles in [-180, 180) brought into [-180, 180) (one turn at
+    most: an add or a subtract, no modulo)."""
+    if x >= 180.0:
+        x -= 360.0
+    elif x < -180.0:
+        x += 360.0
+    return x
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _gap_sq(x, low, high):
     """Squared wrapped distance from angle ``x`` to the nearest angle of ``[low, high]``."""
     if x < low:
@@ -77,11 +88,7 @@ def _search(q, first, active, leaf0, n_leaves, box_base, box_lo, box_hi, leaf_st
             x_q = q[first + d]
             least = np.inf
             for j in range(n):
-                x = x_q - leaf_weights[row + j]
-                if x >= 180.0:
-                    x -= 360.0
-                elif x < -180.0:
-                    x += 360.0
+                x = wrap_difference(x_q - leaf_weights[row + j])
                 acc[j] += x * x
                 least = min(least, acc[j])
             row += n
@@ -117,11 +124,7 @@ def nearest(points, blocks, cols, weights, order, box_lo, box_hi, leaf_start, le
                            bounds, acc)
             offset = blocks[k, 6] + (p - blocks[k, 7]) * width
             for d in range(active, width):  # the DOFs every neuron of the block shares
-                x = q[first + d] - weights[offset + d]
-                if x >= 180.0:
-                    x -= 360.0
-                elif x < -180.0:
-                    x += 360.0
+                x = wrap_difference(q[first + d] - weights[offset + d])
                 s += x * x
             index[i, k] = order[p]
             dist_sq[i, k] = s
