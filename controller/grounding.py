@@ -9,10 +9,6 @@ at every frame in which the reference has a foot down, the root is shifted verti
 that the body's lowest point is :data:`GROUND_DEPTH_M` into the floor; frames with no
 foot down (flight) take the shift interpolated from their neighbours, and the shift is
 low-passed (:data:`GROUND_SHIFT_HZ`) so that it adds no jerk of its own.
-
-The lowest point is found in closed form for capsules and spheres above a horizontal
-floor plane (one ``mj_kinematics`` per frame: about 50 times faster than asking
-``mj_geomDistance`` of every geom), and by ``mj_geomDistance`` for any other geometry.
 """
 
 from __future__ import annotations
@@ -69,7 +65,8 @@ def floor_clearance(model, data, qpos) -> float:
 
 
 def floor_clearances(model, qpos, data=None) -> np.ndarray:
-    """:func:`floor_clearance` of every state of ``qpos`` (T, nq): an array (T,), metres.
+    """:func:`floor_clearance` of every state of ``qpos`` (T, nq): an array (T,), metres
+    (``mj_geomDistance`` of every body geom to the floor plane).
 
     Raises
     ------
@@ -78,30 +75,17 @@ def floor_clearances(model, qpos, data=None) -> np.ndarray:
     """
     import mujoco
 
-    plane, capsule, sphere = (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_CAPSULE,
-                              mujoco.mjtGeom.mjGEOM_SPHERE)
-    floor = np.flatnonzero((model.geom_bodyid == 0) & (model.geom_type == plane))
+    floor = np.flatnonzero((model.geom_bodyid == 0)
+                           & (model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE))
     if floor.size != 1:
         raise ValueError("the model needs exactly one floor plane")
     floor = int(floor[0])
-    body = np.flatnonzero(model.geom_bodyid != 0)
+    body = np.flatnonzero(model.geom_bodyid != 0).tolist()
     data = mujoco.MjData(model) if data is None else data
     qpos = np.asarray(qpos, dtype=float)
     out = np.empty(qpos.shape[0])
-    closed_form = (np.isin(model.geom_type[body], (capsule, sphere)).all()
-                   and np.allclose(model.geom_quat[floor], (1, 0, 0, 0)))
-    half = np.where(model.geom_type[body] == capsule, model.geom_size[body, 1], 0.0)
-    radius = model.geom_size[body, 0]
     for t, q in enumerate(qpos):
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        if closed_form:
-            # a capsule's lowest point: its centre less the half length along its axis's
-            # vertical component, less its radius
-            axis_z = np.abs(data.geom_xmat[body, 8])
-            low = data.geom_xpos[body, 2] - half * axis_z - radius
-            out[t] = low.min() - data.geom_xpos[floor, 2]
-        else:
-            out[t] = min(mujoco.mj_geomDistance(model, data, floor, int(g), 1.0, None)
-                         for g in body)
+        out[t] = min(mujoco.mj_geomDistance(model, data, floor, g, 1.0, None) for g in body)
     return out

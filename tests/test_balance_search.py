@@ -138,19 +138,3 @@ def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk,
     again = balance.replay(model02, run)
     np.testing.assert_allclose(again, run.qpos, atol=1e-9, equal_nan=True)
 
-
-def test_closed_form_lowest_point_is_mujocos(model02, walk):
-    """The capsules' lowest point in closed form agrees with mj_geomDistance against the
-    floor on real frames (and the general path is the one taken for other geometry)."""
-    from controller.grounding import floor_clearances
-
-    qpos = to_qpos(model02, walk)[::20]
-    data = mujoco.MjData(model02)
-    fast = floor_clearances(model02, qpos)
-    exact = []
-    for q in qpos:
-        data.qpos[:] = q
-        mujoco.mj_kinematics(model02, data)
-        exact.append(min(mujoco.mj_geomDistance(model02, data, 0, g, 1.0, None)
-                         for g in range(1, model02.ngeom)))
-    np.testing.assert_allclose(fast, exact, atol=1e-9)
