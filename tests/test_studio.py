@@ -1,11 +1,10 @@
 """``upm studio``: the session recomputes on every change, and the real page shows it in
-headless Chromium (Debian's ``chromium``)."""
+headless Chromium (Debian's ``chromium``, driven by Playwright)."""
 
 from __future__ import annotations
 
 import os
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -64,17 +63,38 @@ def test_alpha_reshapes_the_window_and_poses_follow(session):
     assert low.valid.shape == (n,)
 
 
-def _screenshot(url: str, out_path, user_dir) -> np.ndarray:
+def _open_browser():
+    """Headless Chromium (Debian's) driven by Playwright, so the test waits for what it
+    needs to see instead of guessing a load time: a one-shot ``--screenshot`` with a
+    virtual-time budget captured a blank page on a loaded CI machine."""
+    from playwright.sync_api import sync_playwright
+
+    driver = sync_playwright().start()
+    browser = driver.chromium.launch(
+        executable_path=CHROMIUM,
+        args=["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+              "--disable-background-networking", "--disable-component-update",
+              "--disable-sync", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
+    return driver, browser
+
+
+def _wait_for_shot(page, path, done, timeout_s=240.0) -> np.ndarray:
+    """Screenshots of ``page`` until ``done(rgb)`` holds; the last one is kept at ``path``.
+
+    Returns the (H, W, 3) integer RGB of the last screenshot. Slow on a loaded machine
+    (software WebGL), hence the generous real-time ``timeout_s``; the screenshot is asserted
+    on afterwards, so a page that never renders fails the test."""
+    import time
+
     import matplotlib.image
 
-    subprocess.run(
-        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-         "--no-first-run", "--disable-background-networking", "--disable-component-update",
-         "--disable-sync", f"--user-data-dir={user_dir}", "--use-gl=swiftshader",
-         "--enable-unsafe-swiftshader", "--window-size=1400,1000",
-         "--virtual-time-budget=8000", f"--screenshot={out_path}", url],
-        check=True, capture_output=True, timeout=300)  # slow on a loaded machine
-    return (matplotlib.image.imread(out_path)[..., :3] * 255).round().astype(int)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        page.screenshot(path=str(path), timeout=timeout_s * 1000)
+        rgb = (matplotlib.image.imread(path)[..., :3] * 255).round().astype(int)
+        if done(rgb) or time.monotonic() > deadline:
+            return rgb
+        page.wait_for_timeout(500)
 
 
 def _figure_pixels(rgb: np.ndarray) -> int:
@@ -94,31 +114,55 @@ def _figure_pixels(rgb: np.ndarray) -> int:
 @pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine (scripts/setup "
                     "installs Debian's chromium; none could be installed here)")
 def test_page_in_headless_chromium_follows_alpha(session, tmp_path):
+    """The real page: the humanoid appears in the 3D view, the Fig. 13 image in the panel,
+    and moving alpha through the server's API moves the humanoid on the page."""
     from studio.app import Studio
 
     studio = Studio(session, port=_free_port())
+    messages = []
+    driver = browser = None
     try:
-        # Paused: a playing scene streams a pose per frame to the page, and headless
-        # Chromium's virtual-time budget then waited minutes for the network to settle.
+        # Paused, so that the only change on the page is the one alpha makes.
         studio.playing.value = False
-        url = f"http://127.0.0.1:{studio.port}/"
         first = studio.set(alpha=0.1, frame=studio.scene.result.window.start + 10)
         first_pos_m = first.geom_pos_m[int(studio.frame.value)]
+        driver, browser = _open_browser()
+        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        page.on("pageerror", lambda error: messages.append(f"page error: {error}"))
+        page.on("console", lambda message: messages.append(message.text))
+        page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
+        low = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: _figure_pixels(rgb) > 500)
+        assert _figure_pixels(low) > 500, f"no humanoid in the 3D view; page said {messages}"
         second = studio.set(alpha=0.9)
-        # one page load: two took over 5 minutes on the loaded 2-core machine
-        shot = _screenshot(url, tmp_path / "b.png", tmp_path / "profile")
+        high = _wait_for_shot(page, tmp_path / "b.png",
+                              lambda rgb: _view_pixels_changed(low, rgb) > 300)
+        assert studio.wait_for_curve(timeout=300)
+        curve_h, curve_w = np.asarray(studio.curve.image).shape[:2]
+        shown = page.evaluate("Array.from(document.images, i => [i.naturalWidth, "
+                              "i.naturalHeight])")
     finally:
+        if browser is not None:
+            browser.close()
+        if driver is not None:
+            driver.stop()
         studio.stop()
     assert first.result.alpha == 0.1 and second.result.alpha == 0.9
     assert np.abs(first.result.window_posture_deg
                   - second.result.window_posture_deg).max() > 5.0
-    # the pose the page is sent moved with alpha
+    # the pose the page is sent moved with alpha, and the page drew it
     assert np.abs(second.geom_pos_m[int(studio.frame.value)] - first_pos_m).max() > 0.01
-    assert len(np.unique(shot.reshape(-1, 3), axis=0)) > 50, "blank page"
-    assert _figure_pixels(shot) > 500, "no humanoid in the 3D view"
+    assert len(np.unique(high.reshape(-1, 3), axis=0)) > 50, "blank page"
+    assert _figure_pixels(high) > 500, f"no humanoid in the 3D view; page said {messages}"
+    assert _view_pixels_changed(low, high) > 300, "the humanoid did not move with alpha"
+    assert [curve_w, curve_h] in shown, f"no Fig. 13 image on the page (images: {shown})"
     keep = os.environ.get("UPM_STUDIO_SCREENSHOT")  # README figure: docs/figures/studio.png
     if keep:
         shutil.copyfile(tmp_path / "b.png", keep)
+
+
+def _view_pixels_changed(before: np.ndarray, after: np.ndarray) -> int:
+    """Pixels of the 3D view (left of the GUI panel) that changed between two screenshots."""
+    return int((np.abs(after[:, :900] - before[:, :900]).sum(axis=-1) > 30).sum())
 
 
 def _free_port() -> int:
