@@ -9,18 +9,19 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
    (mocap feet hover by centimetres); hinges and root position interpolated linearly
    between frames, the root quaternion by normalised linear interpolation, velocities and
    accelerations from central differences (:func:`controller.dynamics.finite_differences`);
-   hinge targets kept 2 degrees inside each joint's range (the limits' forces are not in
-   the plan);
 2. moves the swing foot (:mod:`controller.placement`): by the swing hip, towards where
    the capture offset says it should land, and, by hip and knee, no lower than the
-   reference's swing ankle;
+   reference's swing ankle (a swing foot that scrapes the floor is lifted); lets a toe
+   pressed on the floor lie flat (:meth:`_Control._flatten_toes`); then keeps every hinge
+   target 2 degrees inside its joint's range (the limits' forces are not in the plan);
 3. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` (clipped to
    :data:`MAX_ACCELERATION`) with ``e`` the difference between the target and the state
    (``mj_differentiatePos``): the hinges and the root's orientation and height stiffly, the
    root's horizontal position not at all, only its velocity (the character may drift from
    the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
-4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
-   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`);
+4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids
+   (the toes' excepted: a toe cannot carry the body), no force on the root and each
+   joint's torque range (:class:`controller.wbc.WholeBodyID`);
 5. applies the joint torques through torque actuators: the model is used with its position
    servos turned into torque motors of the same strength (:func:`torque_model`). The root
    has no actuator and ``xfrc_applied`` is never written.
@@ -31,7 +32,7 @@ copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays near
 reference's height and upright. Where the character still gets into trouble (pelvis well
 below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
 runs the last segments again in other :data:`MODES` (placement gain, swing clearance,
-which swing-foot contacts the plan leans on) from their saved states. The controller's
+which foot contacts the plan leans on) from their saved states. The controller's
 balance is thin (which walks it gets through changes with these choices), and the search
 buys robustness where it is needed, at the cost of the segments it runs again (``simulated_steps``).
 
@@ -92,15 +93,17 @@ class Mode(NamedTuple):
     placement_gain: float
     swing_contacts_excluded: str
     swing_clearance_m: float
+    flatten_toes: bool = True
 
 
 #: The controller's modes, tried in this order where the default leads to trouble: the
 #: foot-placement gain, which floor contacts of the foot the reference has in the air are
-#: not planned as support ("none"; "toes": a swing toe that scrapes the floor is not
-#: pinned to it; "foot": no contact of that foot), and the swing ankle's clearance above
-#: the reference's, metres (:mod:`controller.placement`). The first is the default.
+#: not planned as support ("none"; "swing toes": a swing toe that scrapes the floor is not
+#: pinned to it; "foot": no contact of that foot), the swing ankle's clearance above the
+#: reference's, metres (:mod:`controller.placement`), and whether a toe pressed on the
+#: floor lies flat (:meth:`_Control._flatten_toes`). The first is the default.
 MODES = (Mode(0.3, "none", 0.0), Mode(0.3, "none", 0.04), Mode(0.6, "none", 0.02),
-         Mode(0.3, "toes", 0.04), Mode(0.6, "toes", 0.04), Mode(0.3, "foot", 0.04))
+         Mode(0.3, "swing toes", 0.04), Mode(0.6, "swing toes", 0.04), Mode(0.3, "foot", 0.04))
 #: Foot-placement gains chosen among by short rollouts for the default mode ...
 SELECT_GAINS = (0.3, 0.6)
 #: ... every this many seconds ...
@@ -118,7 +121,10 @@ MAX_BACKTRACK = 6
 #: ... and the segments after a changed one keep its mode for this long ...
 STICKY_S = 2.0
 #: ... within this many times the reference's physics steps in all.
-SEARCH_BUDGET = 10.0
+SEARCH_BUDGET = 15.0
+#: A toe hinge that turns the toe's axis up or down slower than this (per radian, near a
+#: vertical hinge) is not flattened.
+MIN_TOE_PITCH_RATE = 0.2
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
 
@@ -368,7 +374,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         t = 1
         while t < n_frames:
             search.enter(data, t)
-            gain, exclude, clearance = MODES[search.mode(t)]  # a Mode
+            mode = MODES[search.mode(t)]
+            gain = mode.placement_gain
             if selector is not None and search.mode(t) == 0:
                 # the default mode's gain, chosen by lookahead (once per start frame)
                 first = (t - 1) - (t - 1) % selector.every_frames
@@ -376,7 +383,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     selected[first] = selector.choose(data, first) if first == t - 1 else gain
                 gain = selected[first]
             for k in range((t - 1) * substeps, t * substeps):
-                applied, tau = control.step(data, k, gain, exclude, clearance)
+                applied, tau = control.step(data, k, mode, gain)
                 ctrl[k] = applied
                 steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
@@ -462,16 +469,25 @@ class _Control:
         self.err = np.zeros(sim.nv)
         self.toes = {b for b in range(sim.nbody)
                      if "toes" in (mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_BODY, b) or "")}
+        # (body, hinge, its qpos address, capsule) of each toe with one hinge
+        self.toe_hinges = []
+        capsule = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+        for b in sorted(self.toes):
+            hinges = [j for j in range(sim.njnt) if sim.jnt_bodyid[j] == b]
+            capsules = [g for g in range(sim.ngeom)
+                        if sim.geom_bodyid[g] == b and sim.geom_type[g] == capsule]
+            if len(hinges) == 1 and capsules:
+                self.toe_hinges.append((b, hinges[0], int(sim.jnt_qposadr[hinges[0]]),
+                                        capsules[0]))
 
     def _excluded(self, how: str, frame: int):
         """The bodies whose floor contacts the plan does not lean on (see :data:`MODES`)."""
         if how == "none":
             return ()
         swing = self.placement.swing_bodies(frame)
-        return swing & self.toes if how == "toes" else swing
+        return swing & self.toes if how == "swing toes" else swing
 
-    def step(self, data, k: int, gain: float, exclude: str = "none",
-             clearance_m: float | None = None):
+    def step(self, data, k: int, mode: Mode, gain: float | None = None):
         """Control and take physics step ``k``; returns the applied and the planned
         torques, (nu,) each."""
         import mujoco
@@ -484,6 +500,12 @@ class _Control:
         qd_ref = (1 - w) * self.ref_qvel[i] + w * self.ref_qvel[i + 1]
         qdd_ref = (1 - w) * self.ref_qacc[i] + w * self.ref_qacc[i + 1]
         mujoco.mj_step1(sim, data)
+        frame = min(int(round(s)), n_frames - 1)
+        if PLACEMENT:
+            gain = mode.placement_gain if gain is None else gain
+            self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m)
+        if mode.flatten_toes:
+            self._flatten_toes(data, q_ref)
         # targets inside the joint ranges: the limits' forces are not in the plan
         hinge = q_ref[self.hinge_q]
         clipped = (hinge < self.low) | (hinge > self.high)
@@ -491,19 +513,41 @@ class _Control:
             q_ref[self.hinge_q] = np.clip(hinge, self.low, self.high)
             qd_ref[self.hinge_v[clipped]] = 0.0
             qdd_ref[self.hinge_v[clipped]] = 0.0
-        frame = min(int(round(s)), n_frames - 1)
-        if PLACEMENT:
-            self.placement.adjust(data, frame, q_ref, gain, clearance_m)
         mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
         qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
         np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
         tau, _, _ = self.solver.solve(
-            data, qdd_des,
-            exclude=self._excluded(exclude, frame))
+            data, qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame))
         applied = np.clip(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied
         mujoco.mj_step2(sim, data)
         return applied, tau
+
+    def _flatten_toes(self, data, q_ref) -> None:
+        """A toe pressed on the floor yields until it lies flat: its target in ``q_ref``
+        (in place) becomes the angle at which its capsule is level (to first order).
+
+        The toe's strength (about 20 N m) cannot carry the body on the toe's tip, and the
+        plan does not lean on toes (:data:`MODES`): a human forefoot bears weight on the
+        ball with the toes pressed flat (the MTP joint dorsiflexed by the floor), and a
+        tracked toe angle from mocap would keep the tip down and the ball off the floor.
+        """
+        n = data.ncon
+        if not n:
+            return
+        bodies = self.sim.geom_bodyid[data.contact.geom[:n]]
+        on_floor = bodies[(bodies == 0).any(axis=1)].ravel()
+        for body, hinge, qadr, geom in self.toe_hinges:
+            if body not in on_floor:
+                continue
+            # the capsule's axis, and how fast its height changes as the hinge turns (the
+            # vertical component of axis x direction; either sign of either will do)
+            xmat = data.geom_xmat[geom]
+            dx, dy, dz = xmat[2], xmat[5], xmat[8]
+            ax, ay, _ = data.xaxis[hinge]
+            rate = ax * dy - ay * dx
+            if abs(rate) >= MIN_TOE_PITCH_RATE:
+                q_ref[qadr] = data.qpos[qadr] - dz / rate
 
 
 class _GainSelector:
@@ -533,7 +577,7 @@ class _GainSelector:
             cost = 0.0
             for t in range(frame + 1, last + 1):
                 for k in range((t - 1) * control.substeps, t * control.substeps):
-                    control.step(scratch, k, gain, "none", MODES[0].swing_clearance_m)
+                    control.step(scratch, k, MODES[0], gain)
                 if not np.all(np.isfinite(scratch.qpos)):
                     cost = math.inf
                     break

@@ -34,6 +34,10 @@ SWING_HEIGHT = True
 #: Extra height of the swing ankle above the reference's while the reference swings it,
 #: metres (the default; the balance controller's modes choose their own).
 SWING_CLEARANCE_M = 0.0
+#: Damping of the swing leg's inverse kinematics, m (see :func:`_damped_least_squares`).
+IK_DAMPING_M = 0.05
+#: The largest change of one swing-leg joint's target, radians.
+MAX_TURN_RAD = math.radians(45.0)
 _SIDES = ("l", "r")
 
 
@@ -188,12 +192,30 @@ class FootPlacement:
             if not self.ref_down[frame, swing]:
                 lift += SWING_CLEARANCE_M if clearance_m is None else clearance_m
             lift = max(0.0, lift)
-            jac = self._jacp[:, dofs]
-            q_ref[qadr] += np.linalg.lstsq(jac, np.append(shift, lift), rcond=1e-3)[0]
+            q_ref[qadr] += _damped_least_squares(self._jacp[:, dofs], np.append(shift, lift))
         else:
-            jac = self._jacp[:2, dofs]  # (2, 3)
-            q_ref[qadr] += np.linalg.lstsq(jac, shift, rcond=None)[0]
+            q_ref[qadr] += _damped_least_squares(self._jacp[:2, dofs], shift)
         return shift
+
+
+def _damped_least_squares(jac, move_m) -> np.ndarray:
+    """The joint change (rad) that moves a point by ``move_m`` through its Jacobian ``jac``
+    (m/rad), damped by :data:`IK_DAMPING_M` so that a near-singular leg (a straight knee)
+    is not asked for a huge turn, and no larger than :data:`MAX_TURN_RAD` per joint.
+
+    Parameters
+    ----------
+    jac : ndarray, shape (k, n)
+    move_m : ndarray, shape (k,)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    jjt = jac @ jac.T
+    jjt[np.diag_indices_from(jjt)] += IK_DAMPING_M ** 2
+    turn = jac.T @ np.linalg.solve(jjt, move_m)
+    return np.clip(turn, -MAX_TURN_RAD, MAX_TURN_RAD)
 
 
 def _descends(model, body: int, ancestor: int) -> bool:
