@@ -29,8 +29,8 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
 Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
 :data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
 copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
-reference's height and upright. Where the character still gets into trouble (pelvis well
-below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
+reference's height and upright. Where the character still gets into trouble (pelvis or
+head well below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
 runs the last segments again in other :data:`MODES` (placement gain, swing clearance,
 which foot contacts the plan leans on) from their saved states. The controller's
 balance is thin (which walks it gets through changes with these choices), and the search
@@ -113,10 +113,12 @@ LOOKAHEAD_S = 1.0
 #: The search: each segment of this many seconds runs in one mode ...
 SEGMENT_S = 0.25
 #: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
-#: far from vertical) is run again in the next mode, then its predecessors, up to this
-#: many segments back ...
+#: far from vertical, or the head this far below the reference's: bent over at the waist
+#: with the pelvis still up) is run again in the next mode, then its predecessors, up to
+#: this many segments back ...
 TROUBLE_DROP_M = 0.12
 TROUBLE_UP = 0.8
+TROUBLE_HEAD_DROP_M = 0.25
 MAX_BACKTRACK = 6
 #: ... and the segments after a changed one keep its mode for this long ...
 STICKY_S = 2.0
@@ -363,7 +365,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     budget = SEARCH_BUDGET if search_budget is None else float(search_budget)
     if not (math.isfinite(budget) and budget >= 0):
         raise ValueError(f"the search budget must be a number >= 0, not {search_budget!r}")
-    search = _Search(sim, n_frames, fps, substeps, ref_pelvis, pelvis_body, budget)
+    search = _Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
+                     (pelvis_body, head_site), budget)
     selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
     selected = {}
@@ -594,23 +597,27 @@ class _Search:
 
     The run is cut into segments of :data:`SEGMENT_S`; each runs in one mode, the first
     by default. When the character gets into trouble (pelvis :data:`TROUBLE_DROP_M`
-    below the reference's, or its up axis tilted below :data:`TROUBLE_UP`, or the
-    simulation fails), the segment is run again from its saved start state in the next
-    mode; when a segment has no modes left, the one before it (up to
-    :data:`MAX_BACKTRACK` back), and the segments after it start again; the segments
-    after a changed one keep its mode for :data:`STICKY_S`. When the
+    below the reference's, or its up axis tilted below :data:`TROUBLE_UP`, or the head
+    :data:`TROUBLE_HEAD_DROP_M` below the reference's, or the simulation fails), the
+    segment is run again from its saved start state in the next mode; when a segment has
+    no modes left, the one before it (up to :data:`MAX_BACKTRACK` back), and the segments
+    after it start again; the segments after a changed one keep its mode for
+    :data:`STICKY_S`. When the
     search has spent :data:`SEARCH_BUDGET` times the reference's physics steps, or has
     tried every mode within reach, the attempt that got furthest is run again and the
     run goes on from it (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with
     sampled target offsets instead of a few discrete modes.
     """
 
-    def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_pelvis,
-                 pelvis_body: int, budget: float = SEARCH_BUDGET):
+    def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_heights_m,
+                 watched: tuple[int, int], budget: float = SEARCH_BUDGET):
+        """``ref_heights_m``: the reference's pelvis and head heights, (T,) each;
+        ``watched``: the pelvis body and the head site."""
         self.sim, self.n_frames = sim, n_frames
         self.every = max(1, int(round(SEGMENT_S * fps)))
         self.sticky = int(round(STICKY_S / SEGMENT_S))
-        self.ref_pelvis, self.pelvis_body = ref_pelvis, pelvis_body
+        self.ref_pelvis, self.ref_head = ref_heights_m
+        self.pelvis_body, self.head_site = watched
         self.budget_steps = budget * (n_frames - 1) * substeps
         self.choice: dict[int, int] = {}
         self.saved: dict[int, object] = {}
@@ -655,7 +662,8 @@ class _Search:
         if t <= self.quiet_until:
             return False
         low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
-        return bool(low or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
+        bent = self.ref_head[t] - data.site_xpos[self.head_site, 2] > TROUBLE_HEAD_DROP_M
+        return bool(low or bent or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
 
     def retry(self, data, t: int, steps: int) -> int | None:
         """Restore the state for the next attempt; returns the frame to run from, or

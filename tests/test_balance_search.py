@@ -49,8 +49,9 @@ def search(model02):
     data = mujoco.MjData(sim)
     fps, every = 120.0, int(round(balance.SEGMENT_S * 120.0))
     n_frames = 20 * every
-    ref_pelvis = np.full(n_frames, 1.0)
-    s = balance._Search(sim, n_frames, fps, 5, ref_pelvis, 1)
+    ref_pelvis, ref_head = np.full(n_frames, 1.0), np.full(n_frames, 1.6)
+    head = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
+    s = balance._Search(sim, n_frames, fps, 5, (ref_pelvis, ref_head), (1, head))
     return s, data, every
 
 
@@ -78,6 +79,30 @@ def test_search_retries_then_backtracks(search):
     last_sticky = 1 + s.sticky
     assert s.modes()[:last_sticky + 2].tolist() == [0] + [1] * s.sticky + [1, 0]
     assert s.retries == modes
+
+
+def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search, model02):
+    """In trouble: the pelvis 12 cm below the reference's, or the head 25 cm below it
+    with the pelvis up (bent over at the waist), or the pelvis tilted."""
+    s, data, every = search
+    sim = s.sim
+    data.qpos[:] = sim.qpos0
+    data.qpos[2] = 1.0
+    mujoco.mj_kinematics(sim, data)
+    pelvis, head = data.xpos[s.pelvis_body, 2], data.site_xpos[s.head_site, 2]
+    t = every
+    s.ref_pelvis[t], s.ref_head[t] = pelvis + 0.05, head + 0.1
+    assert not s.in_trouble(data, t)
+    s.ref_pelvis[t] = pelvis + 0.15
+    assert s.in_trouble(data, t)
+    s.ref_pelvis[t], s.ref_head[t] = pelvis + 0.05, head + 0.3
+    assert s.in_trouble(data, t)
+    # tilted 60 degrees about x, at the reference's heights
+    s.ref_pelvis[t], s.ref_head[t] = pelvis, head
+    data.qpos[3:7] = [np.cos(np.pi / 6), np.sin(np.pi / 6), 0.0, 0.0]
+    mujoco.mj_kinematics(sim, data)
+    s.ref_head[t] = data.site_xpos[s.head_site, 2]
+    assert s.in_trouble(data, t)
 
 
 def test_search_gives_up_out_of_reach_or_budget(search):
