@@ -19,9 +19,8 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
    (``mj_differentiatePos``): the hinges and the root's orientation and height stiffly, the
    root's horizontal position not at all, only its velocity (the character may drift from
    the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
-4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids
-   (the toes' excepted: a toe cannot carry the body), no force on the root and each
-   joint's torque range (:class:`controller.wbc.WholeBodyID`);
+4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
+   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`);
 5. applies the joint torques through torque actuators: the model is used with its position
    servos turned into torque motors of the same strength (:func:`torque_model`). The root
    has no actuator and ``xfrc_applied`` is never written.
@@ -30,9 +29,9 @@ Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
 :data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
 copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
 reference's height and upright. Where the character still gets into trouble (pelvis or
-head well below the reference's, or tilted), a backtracking search (:class:`_Search`, after SAMCON)
-runs the last segments again in other :data:`MODES` (placement gain, swing clearance,
-which foot contacts the plan leans on) from their saved states. The controller's
+head well below the reference's, or tilted), a backtracking search (:class:`_Search`,
+after SAMCON) runs the last segments again in other :data:`MODES` (placement gain, swing
+clearance, which swing-foot contacts the plan leans on) from their saved states. The controller's
 balance is thin (which walks it gets through changes with these choices), and the search
 buys robustness where it is needed, at the cost of the segments it runs again (``simulated_steps``).
 
@@ -93,15 +92,14 @@ class Mode(NamedTuple):
     placement_gain: float
     swing_contacts_excluded: str
     swing_clearance_m: float
-    flatten_toes: bool = True
 
 
 #: The controller's modes, tried in this order where the default leads to trouble: the
 #: foot-placement gain, which floor contacts of the foot the reference has in the air are
 #: not planned as support ("none"; "swing toes": a swing toe that scrapes the floor is not
 #: pinned to it; "foot": no contact of that foot), the swing ankle's clearance above the
-#: reference's, metres (:mod:`controller.placement`), and whether a toe pressed on the
-#: floor lies flat (:meth:`_Control._flatten_toes`). The first is the default.
+#: reference's, metres (:mod:`controller.placement`). The first is the default. In every
+#: mode a toe pressed on the floor lies flat (:meth:`_Control._flatten_toes`).
 MODES = (Mode(0.3, "none", 0.0), Mode(0.3, "none", 0.04), Mode(0.6, "none", 0.02),
          Mode(0.3, "swing toes", 0.04), Mode(0.6, "swing toes", 0.04), Mode(0.3, "foot", 0.04))
 #: Foot-placement gains chosen among by short rollouts for the default mode ...
@@ -507,8 +505,7 @@ class _Control:
         if PLACEMENT:
             gain = mode.placement_gain if gain is None else gain
             self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m)
-        if mode.flatten_toes:
-            self._flatten_toes(data, q_ref)
+        self._flatten_toes(data, q_ref)
         # targets inside the joint ranges: the limits' forces are not in the plan
         hinge = q_ref[self.hinge_q]
         clipped = (hinge < self.low) | (hinge > self.high)
@@ -530,10 +527,10 @@ class _Control:
         """A toe pressed on the floor yields until it lies flat: its target in ``q_ref``
         (in place) becomes the angle at which its capsule is level (to first order).
 
-        The toe's strength (about 20 N m) cannot carry the body on the toe's tip, and the
-        plan does not lean on toes (:data:`MODES`): a human forefoot bears weight on the
-        ball with the toes pressed flat (the MTP joint dorsiflexed by the floor), and a
-        tracked toe angle from mocap would keep the tip down and the ball off the floor.
+        The toe's strength (about 20 N m) cannot carry the body on the toe's tip: a human
+        forefoot bears weight on the ball with the toes pressed flat (the MTP joint
+        dorsiflexed by the floor), and a tracked toe angle from mocap would keep the tip
+        down and the ball off the floor.
         """
         n = data.ncon
         if not n:
@@ -602,11 +599,11 @@ class _Search:
     segment is run again from its saved start state in the next mode; when a segment has
     no modes left, the one before it (up to :data:`MAX_BACKTRACK` back), and the segments
     after it start again; the segments after a changed one keep its mode for
-    :data:`STICKY_S`. When the
-    search has spent :data:`SEARCH_BUDGET` times the reference's physics steps, or has
-    tried every mode within reach, the attempt that got furthest is run again and the
-    run goes on from it (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with
-    sampled target offsets instead of a few discrete modes.
+    :data:`STICKY_S`. When the search has spent :data:`SEARCH_BUDGET` times the
+    reference's physics steps, or has tried every mode within reach, the attempt that got
+    furthest is run again and the run goes on from it (a fall is a fall). SAMCON (Liu et
+    al. 2010) searches the same way, with sampled target offsets instead of a few discrete
+    modes.
     """
 
     def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_heights_m,

@@ -81,7 +81,7 @@ def test_search_retries_then_backtracks(search):
     assert s.retries == modes
 
 
-def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search, model02):
+def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
     """In trouble: the pelvis 12 cm below the reference's, or the head 25 cm below it
     with the pelvis up (bent over at the waist), or the pelvis tilted."""
     s, data, every = search
