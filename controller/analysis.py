@@ -17,7 +17,7 @@ CONTROLLERS = ("balance", "servo")
 
 
 def settings(tracking_modes=(), controller: str = "balance",
-             search_budget: float | None = None) -> dict:
+             search_budget: float | None = None, processes: int = 1) -> dict:
     """The thresholds and methods of the checks, JSON-ready (units in the names)."""
     from controller.contacts import SELF_COLLISION_DEPTH_M
     from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
@@ -58,6 +58,7 @@ def settings(tracking_modes=(), controller: str = "balance",
                           "relative to its pelvis and heading (drift reported apart)",
             "search_budget": (_budget(search_budget) if controller == "balance"
                               else None),
+            "processes": processes if controller == "balance" else None,
             "window_free_lead_s": WINDOW_LEAD_S,
             "window_free_tail_s": WINDOW_TAIL_S,
         }
@@ -90,10 +91,11 @@ def _budget(search_budget):
 
 
 def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False,
-             search_budget: float | None = None):
+             search_budget: float | None = None, processes: int = 1):
     """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller``: a
     :class:`controller.balance_report.BalanceTracking` or a
-    :class:`controller.tracking.Tracking`."""
+    :class:`controller.tracking.Tracking`. ``processes``: the balance controller's (1 or
+    2, see :func:`controller.balance.follow`)."""
     from controller.balance_report import balance_tracking
     from controller.tracking import track_qpos
 
@@ -102,14 +104,14 @@ def free_run(model, qpos, fps: float, controller: str = "balance", progress: boo
                          f"{', '.join(CONTROLLERS)})")
     if controller == "balance":
         return balance_tracking(model, qpos, fps, progress=progress,
-                                search_budget=search_budget)
+                                search_budget=search_budget, processes=processes)
     return track_qpos(model, qpos, fps, "free")
 
 
 def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
                      tail_s: float = WINDOW_TAIL_S, controller: str = "balance",
-                     progress: bool = False,
-                     search_budget: float | None = None) -> list[dict]:
+                     progress: bool = False, search_budget: float | None = None,
+                     processes: int = 1) -> list[dict]:
     """Per window, a free-root simulation from the reference state ``lead_s`` before the
     window to ``tail_s`` after it: does the character get through it standing?
 
@@ -131,7 +133,7 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
         a = max(0, w0 - round(lead_s * motion.fps))
         b = min(n, w1 + round(tail_s * motion.fps))
         run = free_run(model, qpos[a:b], motion.fps, controller,
-                       search_budget=search_budget)
+                       search_budget=search_budget, processes=processes)
         inside = slice(w0 - a, w1 - a)
         fall_frame = run.run.fall_frame if controller == "balance" else run.fall_frame
         fall = None if fall_frame is None else a + fall_frame
@@ -150,7 +152,7 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
             model_path=None, controller: str = "balance", progress: bool = False,
-            search_budget: float | None = None):
+            search_budget: float | None = None, processes: int = 1):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -179,6 +181,9 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
         Progress bars for the simulations.
     search_budget : float, optional
         The balance controller's search budget (``controller.balance.follow``).
+    processes : int
+        The balance controller's processes, 1 or 2 (``controller.balance.follow``: the
+        same runs, less wall time on 2 free cores).
 
     Returns
     -------
@@ -197,14 +202,16 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     validity = check_motion(model, motion, windows)
     residual = root_residual(model, to_qpos(model, motion), motion.fps) if dynamics else None
     tracking = {mode: (free_run(model, to_qpos(model, motion), motion.fps, controller,
-                                progress, search_budget)
+                                progress, search_budget, processes)
                        if mode == "free" else track(model, motion, mode))
                 for mode in tracking_modes}
     per_window = (window_free_runs(model, motion, windows, controller=controller,
-                                   progress=progress, search_budget=search_budget)
+                                   progress=progress, search_budget=search_budget,
+                                   processes=processes)
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
-                          settings=settings(tuple(tracking_modes), controller, search_budget),
+                          settings=settings(tuple(tracking_modes), controller, search_budget,
+                                            processes),
                           residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)

@@ -61,6 +61,7 @@ runs :data:`AFTER_FALL_S` more and stops (later frames are NaN).
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import time
@@ -258,7 +259,8 @@ def _torque_range(model) -> np.ndarray:
 
 
 def follow(model, reference_qpos, fps: float, *, seed: int = 0,
-           progress: bool = False, search_budget: float | None = None) -> BalanceRun:
+           progress: bool = False, search_budget: float | None = None,
+           processes: int = 1) -> BalanceRun:
     """Simulate the free-root humanoid balancing while it follows a reference.
 
     Parameters
@@ -276,6 +278,11 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     search_budget : float, optional
         The search's budget in multiples of the reference's physics steps (default
         :data:`SEARCH_BUDGET`; 0: no search).
+    processes : int
+        1 or 2: the foot-placement gain's lookahead rollouts run one after the other, or
+        side by side in this process and a forked helper (:mod:`controller.lookahead`).
+        The run is the same either way; 2 costs less wall time where 2 cores are free
+        (not inside a pool that already keeps every core busy).
 
     Returns
     -------
@@ -365,13 +372,16 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         raise ValueError(f"the search budget must be a number >= 0, not {search_budget!r}")
     search = _Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
                      (pelvis_body, head_site), budget)
-    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames)
+    if processes not in (1, 2):
+        raise ValueError(f"the balance controller runs on 1 or 2 processes, not {processes!r}")
+    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
     selected = {}
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
-    with collected_warnings(), bar:
+    helper = contextlib.closing(selector) if selector else contextlib.nullcontext()
+    with collected_warnings(), bar, helper:
         t = 1
         while t < n_frames:
             search.enter(data, t)
@@ -553,40 +563,29 @@ class _Control:
 class _GainSelector:
     """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
     :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
-    pelvis nearest the reference's height and upright; the first on ties."""
+    pelvis nearest the reference's height and upright; the first on ties. The rollouts
+    run on ``processes`` processes (:class:`controller.lookahead.Lookahead`)."""
 
-    def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int):
-        import mujoco
+    def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
+                 processes: int = 1):
+        from controller.lookahead import Lookahead
 
-        self.control = control
-        self.ref_pelvis = ref_pelvis
-        self.pelvis_body = pelvis_body
         self.n_frames = n_frames
         self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
         self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
-        self.scratch = mujoco.MjData(control.sim)
+        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes)
 
     def choose(self, data, frame: int) -> float:
-        import mujoco
-
-        control, sim, scratch = self.control, self.control.sim, self.scratch
         last = min(self.n_frames - 1, frame + self.lookahead_frames)
+        costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0])
         best, best_cost = SELECT_GAINS[0], math.inf
-        for gain in SELECT_GAINS:
-            mujoco.mj_copyData(scratch, sim, data)
-            cost = 0.0
-            for t in range(frame + 1, last + 1):
-                for k in range((t - 1) * control.substeps, t * control.substeps):
-                    control.step(scratch, k, MODES[0], gain)
-                if not np.all(np.isfinite(scratch.qpos)):
-                    cost = math.inf
-                    break
-                low = self.ref_pelvis[t] - scratch.xpos[self.pelvis_body, 2]
-                tilt = 1.0 - scratch.xmat[self.pelvis_body, 8]
-                cost += max(0.0, low) + tilt
+        for gain, cost in zip(SELECT_GAINS, costs, strict=True):
             if cost < best_cost:
                 best, best_cost = gain, cost
         return best
+
+    def close(self) -> None:
+        self.lookahead.close()
 
 
 class _Search:

@@ -126,12 +126,13 @@ class BalanceTracking:
 
 def balance_tracking(model, reference_qpos, fps: float, *, seed: int = 0,
                      progress: bool = False,
-                     search_budget: float | None = None) -> BalanceTracking:
+                     search_budget: float | None = None,
+                     processes: int = 1) -> BalanceTracking:
     """Run :func:`controller.balance.follow` and wrap it for the report."""
     from controller.balance import follow
     from controller.body import body_figures
     from controller.falls import fall_rule
 
     run = follow(model, reference_qpos, fps, seed=seed, progress=progress,
-                 search_budget=search_budget)
+                 search_budget=search_budget, processes=processes)
     return BalanceTracking(run, fall_rule(body_figures(model)))

@@ -13,13 +13,16 @@
 - the balance controller (:func:`controller.balance.follow`, root free) in simulated
   seconds per wall second, against a bare ``mj_step`` loop replaying the torques it
   applied on the same torque-actuated model (the same physics without the control): the
-  ratio is what the whole-body QP costs, in raw ``mj_step`` equivalents per step;
+  ratio is what the whole-body QP costs, in raw ``mj_step`` equivalents per step; on one
+  process, and (keys ``..._2proc_``) with its lookahead rollouts on two (the same run);
 - (full run only) the kinematic checks of every frame of every clip, reading included.
 """
 
 from __future__ import annotations
 
 import time
+
+import numpy as np
 
 from eval.bench import BenchContext, clip_on_humanoid, timeit_best
 
@@ -114,12 +117,15 @@ def run(context: BenchContext) -> dict:
 
 def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> dict:
     """The balance controller's speed against raw ``mj_step`` on the same steps (the
-    run's own; the search's extra steps count in its wall time)."""
+    run's own; the search's extra steps count in its wall time), on one process and on
+    two."""
     import mujoco
 
     from controller.balance import follow, torque_model
 
     run = min((follow(model, qpos, fps) for _ in range(repeat)), key=lambda r: r.wall_s)
+    two = min((follow(model, qpos, fps, processes=2) for _ in range(repeat)),
+              key=lambda r: r.wall_s)
     sim = torque_model(model)
     sim.opt.timestep = run.timestep_s
     data = mujoco.MjData(sim)
@@ -143,6 +149,9 @@ def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> 
         f"reference_mj_step_{prefix}per_s": run.steps / raw_s,
         f"{prefix}ratio_to_raw": (run.sim_s / run.wall_s) / (run.sim_s / raw_s),
         f"{prefix}raw_steps_per_step": run.wall_s / raw_s,
+        f"{prefix}2proc_wall_s_per_sim_s": two.wall_s / two.sim_s,
+        f"{prefix}2proc_raw_steps_per_step": two.wall_s / raw_s,
+        f"{prefix}2proc_same_run": bool(np.array_equal(two.ctrl, run.ctrl)),
     }
 
 

@@ -1,0 +1,61 @@
+"""The balance controller's lookahead rollouts on two processes: the same run as on one,
+the helper process gone afterwards, and an error in the helper raised in the caller."""
+
+import multiprocessing
+import os
+
+import mujoco
+import numpy as np
+import pytest
+
+from controller import to_qpos
+from controller.balance import MODES, follow, torque_model
+from controller.lookahead import Lookahead
+
+
+@pytest.fixture(scope="module")
+def short_walk(model02, walk):
+    # 130 frames at 120 fps: the gain is chosen at frames 0, 60 and 120
+    return to_qpos(model02, walk)[:130], walk.fps
+
+
+def test_two_processes_give_the_same_run(model02, short_walk):
+    qpos, fps = short_walk
+    one = follow(model02, qpos, fps)
+    two = follow(model02, qpos, fps, processes=2)
+    np.testing.assert_array_equal(one.ctrl, two.ctrl)
+    np.testing.assert_array_equal(one.qpos, two.qpos)
+    assert not multiprocessing.active_children()
+
+
+def test_processes_other_than_1_or_2_are_refused(model02, short_walk):
+    qpos, fps = short_walk
+    with pytest.raises(ValueError, match="1 or 2 processes"):
+        follow(model02, qpos[:10], fps, processes=3)
+
+
+class _FailsInHelper:
+    """A controller whose step fails in any process but the one that made it."""
+
+    def __init__(self, sim):
+        self.sim, self.substeps, self.parent = sim, 1, os.getpid()
+
+    def step(self, data, k, mode, gain):
+        if os.getpid() != self.parent:
+            raise RuntimeError(f"step {k} failed in the helper")
+        mujoco.mj_step(self.sim, data)
+
+
+def test_an_error_in_the_helper_is_raised_in_the_caller(model02):
+    sim = torque_model(model02)
+    data = mujoco.MjData(sim)
+    mujoco.mj_forward(sim, data)
+    heights = np.full(5, 1.0)
+    with Lookahead(_FailsInHelper(sim), heights, 1, processes=2) as lookahead:
+        with pytest.raises(RuntimeError, match="failed in the helper"):
+            lookahead.costs(data, 0, 3, (0.3, 0.6), MODES[0])
+        # one process: both rollouts here, no error
+        lookahead.processes = 1
+        costs = lookahead.costs(data, 0, 3, (0.3, 0.6), MODES[0])
+        assert costs[0] == costs[1]
+    assert not multiprocessing.active_children()
