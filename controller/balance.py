@@ -28,12 +28,15 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
 Every :data:`SELECT_EVERY_S` the foot-placement gain is chosen among
 :data:`SELECT_GAINS` by rolling the same controller out :data:`LOOKAHEAD_S` ahead from a
 copy of the state (``mj_copyData``) and keeping the gain whose pelvis stays nearest the
-reference's height and upright. Where the character still gets into trouble (pelvis or
-head well below the reference's, or tilted), a backtracking search (:class:`_Search`,
-after SAMCON) runs the last segments again in other :data:`MODES` (placement gain, swing
-clearance, which swing-foot contacts the plan leans on) from their saved states. The controller's
-balance is thin (which walks it gets through changes with these choices), and the search
-buys robustness where it is needed, at the cost of the segments it runs again (``simulated_steps``).
+reference's height and upright; the chosen gain's rollout is the run's next frames, which
+are taken from it rather than simulated again, and with ``processes=2`` the rollouts run
+side by side (:mod:`controller.lookahead`: the same run either way). Where the character
+still gets into trouble (pelvis or head well below the reference's, or tilted), a
+backtracking search (:class:`_Search`, after SAMCON) runs the last segments again in other
+:data:`MODES` (placement gain, swing clearance, which swing-foot contacts the plan leans
+on) from their saved states. The controller's balance is thin (which walks it gets
+through changes with these choices), and the search buys robustness where it is needed,
+at the cost of the segments it runs again (``simulated_steps``).
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run. The controller has no
@@ -387,16 +390,26 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             search.enter(data, t)
             mode = MODES[search.mode(t)]
             gain = mode.placement_gain
+            recorded = None
             if selector is not None and search.mode(t) == 0:
                 # the default mode's gain, chosen by lookahead (once per start frame)
                 first = (t - 1) - (t - 1) % selector.every_frames
                 if first not in selected:
                     selected[first] = selector.choose(data, first) if first == t - 1 else gain
                 gain = selected[first]
-            for k in range((t - 1) * substeps, t * substeps):
-                applied, tau = control.step(data, k, mode, gain)
-                ctrl[k] = applied
-                steps += 1
+                recorded = selector.recorded(t, gain)
+            elif selector is not None:
+                selector.forget()
+            if recorded is not None:
+                # the lookahead simulated this frame already, from the same state
+                snapshot, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
+                mujoco.mj_copyData(data, sim, snapshot)
+                steps += substeps
+            else:
+                for k in range((t - 1) * substeps, t * substeps):
+                    applied, tau = control.step(data, k, mode, gain)
+                    ctrl[k] = applied
+                    steps += 1
             saturated[t] = (tau < low_nm) | (tau > high_nm)
             bar.n = max(bar.n, t)
             bar.refresh() if progress else None
@@ -404,6 +417,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 back = search.retry(data, t, steps)
                 if back is not None:
                     t, fall, stop_frame = back, None, n_frames
+                    if selector is not None:
+                        selector.forget()
                     continue
                 diverged = t
                 stop_frame = t
@@ -414,6 +429,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     t, fall, stop_frame = back, None, n_frames
                     for first in [f for f in selected if f >= back - 1]:
                         del selected[first]
+                    if selector is not None:
+                        selector.forget()
                     continue
             qpos[t] = data.qpos
             contact[t] = _floor_normal_force(sim, data)
@@ -568,21 +585,52 @@ class _GainSelector:
 
     def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
                  processes: int = 1):
-        from controller.lookahead import Lookahead
+        from controller.lookahead import Lookahead, Recording
 
         self.n_frames = n_frames
         self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
         self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
         self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes)
+        capacity = min(self.every_frames, self.lookahead_frames)
+        self.recordings = [Recording(control.sim, capacity, control.substeps)
+                           for _ in SELECT_GAINS]
+        self.chain = None
+        self.last_choice = 0
 
     def choose(self, data, frame: int) -> float:
+        """The gain from frame ``frame`` on (``data``: the state after it). The rollouts
+        run in this process are recorded for :meth:`recorded` (on two processes, that of
+        the gain chosen last time, the likelier one)."""
         last = min(self.n_frames - 1, frame + self.lookahead_frames)
-        costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0])
-        best, best_cost = SELECT_GAINS[0], math.inf
-        for gain, cost in zip(SELECT_GAINS, costs, strict=True):
+        self.forget()
+        costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0],
+                                     self.recordings, here=self.last_choice)
+        self.chain = frame
+        best, best_cost = 0, math.inf
+        for i, cost in enumerate(costs):
             if cost < best_cost:
-                best, best_cost = gain, cost
-        return best
+                best, best_cost = i, cost
+        self.last_choice = best
+        return SELECT_GAINS[best]
+
+    def recorded(self, t: int, gain: float):
+        """Frame ``t`` as the last choice's rollout simulated it, if the run is still on
+        that rollout (every frame since the choice taken from it, with its gain in the
+        default mode): ``(snapshot, ctrl (substeps, nu), tau (nu,))``, else None."""
+        if self.chain != t - 1:
+            self.chain = None
+            return None
+        out = None
+        for recording in self.recordings:
+            out = out or recording.frame(t, gain)
+        self.chain = t if out is not None else None
+        return out
+
+    def forget(self) -> None:
+        """The run went back: nothing recorded is its future any more."""
+        for recording in self.recordings:
+            recording.clear()
+        self.chain = None
 
     def close(self) -> None:
         self.lookahead.close()

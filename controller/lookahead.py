@@ -8,6 +8,12 @@ and the gain, and the rollouts of different gains can run in different processes
 the same numbers as one after the other. :class:`Lookahead` runs the first gain's rollout
 in the calling process and, with ``processes=2``, the others in a forked helper process
 (which has the controller as it was built: nothing is pickled but the state).
+
+A rollout in the calling process is also the run's own future when its gain is chosen:
+it can keep a :class:`Recording` of its first frames (the whole ``MjData`` after each
+frame and the torques applied at each step), and the run takes those frames from it
+instead of simulating them again. On one process every gain's rollout is recorded; on two,
+the one run here (the caller picks which: the gain it expects to choose).
 """
 
 from __future__ import annotations
@@ -19,8 +25,54 @@ import signal
 import numpy as np
 
 
-def rollout_cost(control, scratch, state, frame: int, last: int, gain: float, mode,
-                 ref_pelvis_m, pelvis_body: int) -> float:
+class Recording:
+    """The first frames of a rollout, to be taken by the run instead of simulated again.
+
+    Attributes
+    ----------
+    start_frame : int
+        The rollout started after this frame.
+    gain : float
+    frames : int
+        Frames recorded so far (``start_frame + 1 .. start_frame + frames``).
+    snapshots : list of mujoco.MjData
+        The whole data after each recorded frame.
+    ctrl : ndarray, shape (capacity, substeps, nu)
+        The torques applied at each step of each frame, N m.
+    tau : ndarray, shape (capacity, nu)
+        The planned torques of each frame's last step, N m.
+    """
+
+    def __init__(self, sim, capacity: int, substeps: int):
+        import mujoco
+
+        self.sim = sim
+        self.snapshots = [mujoco.MjData(sim) for _ in range(capacity)]
+        self.ctrl = np.zeros((capacity, substeps, sim.nu))
+        self.tau = np.zeros((capacity, sim.nu))
+        self.start_frame, self.gain, self.frames = -1, math.nan, 0
+
+    @property
+    def capacity(self) -> int:
+        return len(self.snapshots)
+
+    def begin(self, start_frame: int, gain: float) -> None:
+        self.start_frame, self.gain, self.frames = start_frame, gain, 0
+
+    def frame(self, t: int, gain: float):
+        """``(snapshot, ctrl (substeps, nu), tau (nu,))`` of frame ``t`` if recorded with
+        ``gain``, else None."""
+        i = t - self.start_frame - 1
+        if gain != self.gain or not 0 <= i < self.frames:
+            return None
+        return self.snapshots[i], self.ctrl[i], self.tau[i]
+
+    def clear(self) -> None:
+        self.frames = 0
+
+
+def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
+                 ref_pelvis_m, pelvis_body: int, recording: Recording | None = None) -> float:
     """How far one rollout strays: the sum over frames ``frame + 1 .. last`` of how far
     the pelvis is below the reference's (m, zero when above) plus one minus its up axis's
     vertical component; ``inf`` when the simulation fails.
@@ -29,9 +81,7 @@ def rollout_cost(control, scratch, state, frame: int, last: int, gain: float, mo
     ----------
     control : controller.balance._Control
     scratch : mujoco.MjData
-        Overwritten.
-    state : ndarray, shape (mj_stateSize(mjSTATE_INTEGRATION),)
-        The start state.
+        Holds the start state; overwritten.
     frame, last : int
         Start and last reference frame.
     gain : float
@@ -40,15 +90,26 @@ def rollout_cost(control, scratch, state, frame: int, last: int, gain: float, mo
     ref_pelvis_m : ndarray, shape (T,)
         The reference's pelvis height per frame.
     pelvis_body : int
+    recording : Recording, optional
+        Keeps the rollout's first frames, up to its capacity.
     """
     import mujoco
 
     sim = control.sim
-    mujoco.mj_setState(sim, scratch, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    if recording is not None:
+        recording.begin(frame, gain)
     cost = 0.0
     for t in range(frame + 1, last + 1):
-        for k in range((t - 1) * control.substeps, t * control.substeps):
-            control.step(scratch, k, mode, gain)
+        i = t - frame - 1
+        keep = recording is not None and i < recording.capacity
+        for j, k in enumerate(range((t - 1) * control.substeps, t * control.substeps)):
+            applied, tau = control.step(scratch, k, mode, gain)
+            if keep:
+                recording.ctrl[i, j] = applied
+        if keep:
+            recording.tau[i] = tau
+            mujoco.mj_copyData(recording.snapshots[i], sim, scratch)
+            recording.frames = i + 1
         if not np.all(np.isfinite(scratch.qpos)):
             return math.inf
         low = ref_pelvis_m[t] - scratch.xpos[pelvis_body, 2]
@@ -95,25 +156,50 @@ class Lookahead:
         self._pipe = None
         self._busy = False
 
-    def costs(self, data, frame: int, last: int, gains, mode) -> list[float]:
-        """The rollout cost of each gain from ``data``'s state (not modified)."""
-        state = integration_state(self.control.sim, data)
-        args = (frame, last)
-        if self.processes == 1 or len(gains) == 1:
-            return [self._cost(state, *args, g, mode) for g in gains]
-        pipe = self._start()
-        pipe.send((state, frame, last, tuple(gains[1:]), mode))
-        self._busy = True
-        first = self._cost(state, *args, gains[0], mode)
-        reply = pipe.recv()
-        self._busy = False
-        if isinstance(reply, BaseException):
-            raise reply
-        return [first, *reply]
+    def costs(self, data, frame: int, last: int, gains, mode, recordings=None,
+              here: int = 0) -> list[float]:
+        """The rollout cost of each gain from ``data``'s state (not modified).
 
-    def _cost(self, state, frame, last, gain, mode) -> float:
-        return rollout_cost(self.control, self.scratch, state, frame, last, gain, mode,
-                            self.ref_pelvis_m, self.pelvis_body)
+        ``recordings``: one :class:`Recording` per gain, or None; the rollouts run in this
+        process are recorded (all of them on one process; on two, gain ``here``'s, and
+        the others run in the helper).
+        """
+        import mujoco
+
+        sim = self.control.sim
+        helped = self.processes == 2 and len(gains) > 1
+        local = [here] if helped else list(range(len(gains)))
+        if helped:
+            pipe = self._start()
+            others = tuple(g for i, g in enumerate(gains) if i != here)
+            pipe.send((integration_state(sim, data), frame, last, others, mode))
+            self._busy = True
+        out = [math.nan] * len(gains)
+        for i in local:
+            # an exact copy (warning counters included: the recording may become the run)
+            mujoco.mj_copyData(self.scratch, sim, data)
+            out[i] = self._cost(frame, last, gains[i], mode,
+                                None if recordings is None else recordings[i])
+        if helped:
+            reply = pipe.recv()
+            self._busy = False
+            if isinstance(reply, BaseException):
+                raise reply
+            for i, cost in zip([i for i in range(len(gains)) if i != here], reply,
+                               strict=True):
+                out[i] = cost
+        return out
+
+    def _cost(self, frame, last, gain, mode, recording=None) -> float:
+        return rollout_cost(self.control, self.scratch, frame, last, gain, mode,
+                            self.ref_pelvis_m, self.pelvis_body, recording)
+
+    def _cost_from(self, state, frame, last, gain, mode) -> float:
+        import mujoco
+
+        mujoco.mj_setState(self.control.sim, self.scratch, state,
+                           mujoco.mjtState.mjSTATE_INTEGRATION)
+        return self._cost(frame, last, gain, mode)
 
     def _start(self):
         if self._helper is None:
@@ -137,7 +223,7 @@ class Lookahead:
                 return
             state, frame, last, gains, mode = job
             try:
-                pipe.send([self._cost(state, frame, last, g, mode) for g in gains])
+                pipe.send([self._cost_from(state, frame, last, g, mode) for g in gains])
             except Exception as error:  # noqa: BLE001 - handed to the parent, raised there
                 pipe.send(error)
 

@@ -1,5 +1,6 @@
-"""The balance controller's lookahead rollouts on two processes: the same run as on one,
-the helper process gone afterwards, and an error in the helper raised in the caller."""
+"""The balance controller's lookahead rollouts: on two processes the same run as on one;
+the frames the run takes from a recorded rollout the same as simulating them again; the
+helper process gone afterwards, and an error in the helper raised in the caller."""
 
 import multiprocessing
 import os
@@ -8,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from controller import to_qpos
+from controller import balance, to_qpos
 from controller.balance import MODES, follow, torque_model
 from controller.lookahead import Lookahead
 
@@ -28,6 +29,30 @@ def test_two_processes_give_the_same_run(model02, short_walk):
     assert not multiprocessing.active_children()
 
 
+@pytest.mark.parametrize("processes", [1, 2])
+def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short_walk,
+                                                                   monkeypatch, processes):
+    qpos, fps = short_walk
+    taken = []
+    recorded = balance._GainSelector.recorded
+
+    def counting(self, t, gain):
+        out = recorded(self, t, gain)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(balance._GainSelector, "recorded", counting)
+    reused = follow(model02, qpos, fps, processes=processes)
+    assert sum(taken) > 60  # most of the run's frames came from its lookahead
+    monkeypatch.setattr(balance._GainSelector, "recorded", lambda self, t, gain: None)
+    simulated = follow(model02, qpos, fps, processes=processes)
+    np.testing.assert_array_equal(reused.ctrl, simulated.ctrl)
+    np.testing.assert_array_equal(reused.qpos, simulated.qpos)
+    np.testing.assert_array_equal(reused.torque_nm, simulated.torque_nm)
+    np.testing.assert_array_equal(reused.contact_force_n, simulated.contact_force_n)
+    assert reused.simulated_steps == simulated.simulated_steps
+
+
 def test_processes_other_than_1_or_2_are_refused(model02, short_walk):
     qpos, fps = short_walk
     with pytest.raises(ValueError, match="1 or 2 processes"):
@@ -44,6 +69,7 @@ class _FailsInHelper:
         if os.getpid() != self.parent:
             raise RuntimeError(f"step {k} failed in the helper")
         mujoco.mj_step(self.sim, data)
+        return data.ctrl.copy(), data.ctrl.copy()
 
 
 def test_an_error_in_the_helper_is_raised_in_the_caller(model02):
