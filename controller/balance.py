@@ -187,7 +187,14 @@ class BalanceRun:
         Segments run again by the search.
     simulated_steps : int
         Physics steps taken in all, the search's included (``steps`` of them are the
-        run's own).
+        run's own), counting those taken from the lookahead's recording.
+    lookahead_steps : int
+        Physics steps the foot-placement gain's lookahead rollouts simulated (both
+        processes).
+    reused_steps : int
+        Of ``simulated_steps``, those taken from a lookahead rollout instead of simulated
+        again. The physics steps simulated in all are ``simulated_steps - reused_steps +
+        lookahead_steps``.
     """
 
     fps: float
@@ -220,6 +227,8 @@ class BalanceRun:
     segment_modes: np.ndarray
     retries: int
     simulated_steps: int
+    lookahead_steps: int = 0
+    reused_steps: int = 0
 
     @property
     def steps(self) -> int:
@@ -369,6 +378,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     stop_frame = n_frames
     diverged = None
     steps = 0
+    reused = 0
     external = 0.0
     budget = SEARCH_BUDGET if search_budget is None else float(search_budget)
     if not (math.isfinite(budget) and budget >= 0):
@@ -405,6 +415,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 snapshot, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
                 mujoco.mj_copyData(data, sim, snapshot)
                 steps += substeps
+                reused += substeps
             else:
                 for k in range((t - 1) * substeps, t * substeps):
                     applied, tau = control.step(data, k, mode, gain)
@@ -472,6 +483,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
         sim_s=ctrl_steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
         segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
+        lookahead_steps=selector.lookahead.steps if selector is not None else 0,
+        reused_steps=reused,
     )
 
 

@@ -119,6 +119,8 @@ class BalanceTracking:
             "raw_step_s": run.raw_step_s,
             "search_retries": run.retries,
             "simulated_steps": run.simulated_steps,
+            "lookahead_steps": run.lookahead_steps,
+            "reused_steps": run.reused_steps,
             "segment_modes": run.segment_modes.tolist(),
             **self.summary(),
         }

@@ -72,10 +72,12 @@ class Recording:
 
 
 def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
-                 ref_pelvis_m, pelvis_body: int, recording: Recording | None = None) -> float:
+                 ref_pelvis_m, pelvis_body: int,
+                 recording: Recording | None = None) -> tuple[float, int]:
     """How far one rollout strays: the sum over frames ``frame + 1 .. last`` of how far
     the pelvis is below the reference's (m, zero when above) plus one minus its up axis's
-    vertical component; ``inf`` when the simulation fails.
+    vertical component; ``inf`` when the simulation fails. Returns the cost and the
+    physics steps simulated.
 
     Parameters
     ----------
@@ -111,11 +113,11 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
             mujoco.mj_copyData(recording.snapshots[i], sim, scratch)
             recording.frames = i + 1
         if not np.all(np.isfinite(scratch.qpos)):
-            return math.inf
+            return math.inf, (t - frame) * control.substeps
         low = ref_pelvis_m[t] - scratch.xpos[pelvis_body, 2]
         tilt = 1.0 - scratch.xmat[pelvis_body, 8]
         cost += max(0.0, low) + tilt
-    return cost
+    return cost, (last - frame) * control.substeps
 
 
 def integration_state(model, data) -> np.ndarray:
@@ -155,6 +157,8 @@ class Lookahead:
         self._helper = None
         self._pipe = None
         self._busy = False
+        #: physics steps the rollouts simulated, in this process and in the helper
+        self.steps = 0
 
     def costs(self, data, frame: int, last: int, gains, mode, recordings=None,
               here: int = 0) -> list[float]:
@@ -185,14 +189,18 @@ class Lookahead:
             self._busy = False
             if isinstance(reply, BaseException):
                 raise reply
-            for i, cost in zip([i for i in range(len(gains)) if i != here], reply,
+            costs, steps = reply
+            self.steps += steps
+            for i, cost in zip([i for i in range(len(gains)) if i != here], costs,
                                strict=True):
                 out[i] = cost
         return out
 
     def _cost(self, frame, last, gain, mode, recording=None) -> float:
-        return rollout_cost(self.control, self.scratch, frame, last, gain, mode,
-                            self.ref_pelvis_m, self.pelvis_body, recording)
+        cost, steps = rollout_cost(self.control, self.scratch, frame, last, gain, mode,
+                                   self.ref_pelvis_m, self.pelvis_body, recording)
+        self.steps += steps
+        return cost
 
     def _cost_from(self, state, frame, last, gain, mode) -> float:
         import mujoco
@@ -223,7 +231,9 @@ class Lookahead:
                 return
             state, frame, last, gains, mode = job
             try:
-                pipe.send([self._cost_from(state, frame, last, g, mode) for g in gains])
+                before = self.steps
+                costs = [self._cost_from(state, frame, last, g, mode) for g in gains]
+                pipe.send((costs, self.steps - before))
             except Exception as error:  # noqa: BLE001 - handed to the parent, raised there
                 pipe.send(error)
 

@@ -51,6 +51,10 @@ def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short
     np.testing.assert_array_equal(reused.torque_nm, simulated.torque_nm)
     np.testing.assert_array_equal(reused.contact_force_n, simulated.contact_force_n)
     assert reused.simulated_steps == simulated.simulated_steps
+    # the work saved is counted: the frames taken, in physics steps, and nothing else
+    assert reused.reused_steps == sum(taken) * reused.substeps
+    assert simulated.reused_steps == 0
+    assert reused.lookahead_steps == simulated.lookahead_steps > reused.steps
 
 
 def test_processes_other_than_1_or_2_are_refused(model02, short_walk):

@@ -144,6 +144,10 @@ def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> 
         f"{prefix}fell": run.fell,
         f"{prefix}search_retries": run.retries,
         f"{prefix}simulated_steps_per_step": run.simulated_steps / max(run.steps, 1),
+        # physics steps simulated in all (search, lookahead, less those reused) per step:
+        # the controller's work, free of the machine's noise
+        f"{prefix}physics_steps_per_step": (run.simulated_steps - run.reused_steps
+                                            + run.lookahead_steps) / max(run.steps, 1),
         f"{prefix}sim_s_per_wall_s": run.sim_s / run.wall_s,
         f"{prefix}wall_s_per_sim_s": run.wall_s / run.sim_s,
         f"reference_mj_step_{prefix}per_s": run.steps / raw_s,
