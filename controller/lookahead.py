@@ -152,6 +152,9 @@ class Lookahead:
 
         if processes not in (1, 2):
             raise ValueError(f"lookahead runs on 1 or 2 processes, not {processes!r}")
+        if processes == 2 and "fork" not in multiprocessing.get_all_start_methods():
+            raise ValueError("lookahead on 2 processes forks a helper, and this system "
+                             "cannot fork: use 1 process")
         self.control = control
         self.ref_pelvis_m = ref_pelvis_m
         self.pelvis_body = pelvis_body

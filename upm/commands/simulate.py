@@ -67,7 +67,7 @@ def configure(parser) -> None:
                         help="processes for the balance controller's lookahead rollouts: "
                              "2 runs them side by side (the same results, less wall time "
                              "where 2 cores are free; default: 2 on a machine with 2 or "
-                             "more cores, else 1)")
+                             "more cores that can fork, else 1)")
     parser.add_argument("--amc", metavar="S.amc|S.bvh", default=None,
                         help="write the free-root simulated motion as AMC or BVH, by the "
                              "extension (needs free in --modes)")
@@ -90,9 +90,11 @@ def configure(parser) -> None:
 
 
 def _default_processes() -> int:
+    import multiprocessing
     import os
 
-    return 2 if (os.cpu_count() or 1) >= 2 else 1
+    forks = "fork" in multiprocessing.get_all_start_methods()
+    return 2 if forks and (os.cpu_count() or 1) >= 2 else 1
 
 
 def _default_budget() -> float:
