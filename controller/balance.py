@@ -593,7 +593,8 @@ class _Control:
 class _GainSelector:
     """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
     :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
-    pelvis nearest the reference's height and upright; the first on ties. The rollouts
+    pelvis nearest the reference's height and upright, and the pace nearest the
+    reference's (:func:`controller.lookahead.rollout_cost`); the first on ties. The rollouts
     run on ``processes`` processes (:class:`controller.lookahead.Lookahead`)."""
 
     def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,

@@ -68,6 +68,7 @@ class _FailsInHelper:
 
     def __init__(self, sim):
         self.sim, self.substeps, self.parent = sim, 1, os.getpid()
+        self.ref_qvel = np.zeros((5, sim.nv))  # the reference at rest
 
     def step(self, data, k, mode, gain):
         if os.getpid() != self.parent:
