@@ -90,3 +90,38 @@ def test_an_error_in_the_helper_is_raised_in_the_caller(model02):
         costs = lookahead.costs(data, 0, 3, (0.3, 0.6), MODES[0])
         assert costs[0] == costs[1]
     assert not multiprocessing.active_children()
+
+
+class _Coasting:
+    """A controller that applies no torque, with a reference at rest."""
+
+    def __init__(self, sim, frames):
+        self.sim, self.substeps = sim, 1
+        self.ref_qvel = np.zeros((frames, sim.nv))
+
+    def step(self, data, k, mode, gain):
+        mujoco.mj_step(self.sim, data)
+        return data.ctrl.copy(), data.ctrl.copy()
+
+
+def test_a_rollout_that_strays_from_the_reference_pace_costs_more(model02, monkeypatch):
+    from controller import lookahead
+
+    sim = torque_model(model02)
+    sim.opt.gravity[:] = 0.0  # nothing but the root's own velocity moves it
+    data = mujoco.MjData(sim)
+    mujoco.mj_forward(sim, data)
+    data.qpos[2] += 1.0  # clear of the floor
+    data.qvel[:2] = (0.3, -0.4)  # 0.5 m/s across the floor; the reference stands still
+    control = _Coasting(sim, 6)
+    heights = np.full(6, -1.0)  # never below the reference's pelvis
+    costs = {}
+    for weight in (0.0, 0.03):
+        monkeypatch.setattr(lookahead, "VELOCITY_WEIGHT_S", weight)
+        scratch = mujoco.MjData(sim)
+        mujoco.mj_copyData(scratch, sim, data)
+        costs[weight], steps = lookahead.rollout_cost(control, scratch, 0, 5, 0.3, MODES[0],
+                                                      heights, 1)
+        assert steps == 5
+    # five frames at 0.5 m/s off the reference's pace, 0.03 s per m/s each
+    assert costs[0.03] - costs[0.0] == pytest.approx(5 * 0.03 * 0.5, rel=1e-3)
