@@ -193,8 +193,9 @@ class BalanceRun:
         processes).
     reused_steps : int
         Of ``simulated_steps``, those taken from a lookahead rollout instead of simulated
-        again. The physics steps simulated in all are ``simulated_steps - reused_steps +
-        lookahead_steps``.
+        again (all but the last step of each frame taken: that one is taken again to
+        restore the frame). The physics steps simulated in all are ``simulated_steps -
+        reused_steps + lookahead_steps``.
     """
 
     fps: float
@@ -307,6 +308,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.dynamics import finite_differences, lowpass_qpos, unwrap_hinges
     from controller.falls import fallen, reference_heights
     from controller.grounding import floor_clearance, ground_reference
+    from controller.lookahead import restore_frame
     from controller.mjwarnings import collected_warnings, fatal, warning_counts
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
@@ -412,10 +414,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 selector.forget()
             if recorded is not None:
                 # the lookahead simulated this frame already, from the same state
-                snapshot, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
-                mujoco.mj_copyData(data, sim, snapshot)
+                state, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
+                restore_frame(sim, data, state, ctrl[t * substeps - 1])
                 steps += substeps
-                reused += substeps
+                reused += substeps - 1  # the frame's last step is taken again
             else:
                 for k in range((t - 1) * substeps, t * substeps):
                     applied, tau = control.step(data, k, mode, gain)
@@ -612,9 +614,9 @@ class _GainSelector:
         self.last_choice = 0
 
     def choose(self, data, frame: int) -> float:
-        """The gain from frame ``frame`` on (``data``: the state after it). The rollouts
-        run in this process are recorded for :meth:`recorded` (on two processes, that of
-        the gain chosen last time, the likelier one)."""
+        """The gain from frame ``frame`` on (``data``: the state after it). Every gain's
+        rollout is recorded for :meth:`recorded` (on two processes, the one expected to
+        win, the gain chosen last time, runs in this process)."""
         last = min(self.n_frames - 1, frame + self.lookahead_frames)
         self.forget()
         costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0],
@@ -630,7 +632,8 @@ class _GainSelector:
     def recorded(self, t: int, gain: float):
         """Frame ``t`` as the last choice's rollout simulated it, if the run is still on
         that rollout (every frame since the choice taken from it, with its gain in the
-        default mode): ``(snapshot, ctrl (substeps, nu), tau (nu,))``, else None."""
+        default mode): ``(state (nstate,), ctrl (substeps, nu), tau (nu,))`` for
+        :func:`controller.lookahead.restore_frame`, else None."""
         if self.chain != t - 1:
             self.chain = None
             return None

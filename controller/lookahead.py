@@ -8,14 +8,16 @@ and the gain, and the rollouts of different gains can run in different processes
 the same numbers as one after the other. :class:`Lookahead` runs every rollout in the
 calling process or, with ``processes=2``, one of them there and the others in a forked
 helper process at the same time (the helper has the controller as it was built: nothing
-crosses the pipe but the state, the frames, the gains and the costs).
+crosses the pipe but the state, the frames, the gains, the costs and the recordings).
 
-A rollout in the calling process is also the run's own future when its gain is chosen:
-it can keep a :class:`Recording` of its first frames (the whole ``MjData`` after each
-frame and the torques applied at each step), and the run takes those frames from it
-instead of simulating them again. On one process every gain's rollout is recorded; on two,
-the one run here (the caller picks which: the gain it expects to choose). A recording of
-half a second at 120 fps holds 60 ``MjData`` (about 35 MB for these humanoids).
+A rollout is also the run's own future when its gain is chosen: it keeps a
+:class:`Recording` of its first frames (each frame's state before its last physics step and
+the torques applied at every step), and the run takes those frames from it instead of
+simulating them again: it restores the state and takes that last step again (one physics
+step instead of the frame's controlled ones, five at 120 fps), which leaves exactly the
+data simulating the frame gives. A recording is a few arrays (about 0.35 MB for half a
+second at 120 fps), so the helper's rollouts are recorded too and cross the pipe with their
+costs: the run takes the chosen gain's frames on two processes as on one.
 """
 
 from __future__ import annotations
@@ -35,6 +37,10 @@ VELOCITY_WEIGHT_S = 0.03
 class Recording:
     """The first frames of a rollout, to be taken by the run instead of simulated again.
 
+    A frame is kept as the integration state before its last physics step; the run
+    restores it with :func:`restore_frame`. MuJoCo's warning counters are not in that
+    state, so a recording ends before the first frame in which MuJoCo warned.
+
     Attributes
     ----------
     start_frame : int
@@ -42,8 +48,8 @@ class Recording:
     gain : float
     frames : int
         Frames recorded so far (``start_frame + 1 .. start_frame + frames``).
-    snapshots : list of mujoco.MjData
-        The whole data after each recorded frame.
+    states : ndarray, shape (capacity, nstate)
+        Each frame's integration state (``mjSTATE_INTEGRATION``) before its last step.
     ctrl : ndarray, shape (capacity, substeps, nu)
         The torques applied at each step of each frame, N m.
     tau : ndarray, shape (capacity, nu)
@@ -53,29 +59,63 @@ class Recording:
     def __init__(self, sim, capacity: int, substeps: int):
         import mujoco
 
-        self.sim = sim
-        self.snapshots = [mujoco.MjData(sim) for _ in range(capacity)]
+        size = mujoco.mj_stateSize(sim, mujoco.mjtState.mjSTATE_INTEGRATION)
+        self.states = np.zeros((capacity, size))
         self.ctrl = np.zeros((capacity, substeps, sim.nu))
         self.tau = np.zeros((capacity, sim.nu))
         self.start_frame, self.gain, self.frames = -1, math.nan, 0
 
     @property
     def capacity(self) -> int:
-        return len(self.snapshots)
+        return self.states.shape[0]
 
     def begin(self, start_frame: int, gain: float) -> None:
         self.start_frame, self.gain, self.frames = start_frame, gain, 0
 
     def frame(self, t: int, gain: float):
-        """``(snapshot, ctrl (substeps, nu), tau (nu,))`` of frame ``t`` if recorded with
-        ``gain``, else None."""
+        """``(state (nstate,), ctrl (substeps, nu), tau (nu,))`` of frame ``t`` if
+        recorded with ``gain``, else None."""
         i = t - self.start_frame - 1
         if gain != self.gain or not 0 <= i < self.frames:
             return None
-        return self.snapshots[i], self.ctrl[i], self.tau[i]
+        return self.states[i], self.ctrl[i], self.tau[i]
 
     def clear(self) -> None:
         self.frames = 0
+
+    def packed(self) -> tuple:
+        """What crosses the pipe: the recorded frames only."""
+        n = self.frames
+        return self.start_frame, self.gain, self.states[:n], self.ctrl[:n], self.tau[:n]
+
+    def unpack(self, packed: tuple) -> None:
+        """Take a recording made elsewhere (:meth:`packed`)."""
+        self.start_frame, self.gain, states, ctrl, tau = packed
+        self.frames = n = states.shape[0]
+        self.states[:n], self.ctrl[:n], self.tau[:n] = states, ctrl, tau
+
+
+def restore_frame(sim, data, state, last_ctrl) -> None:
+    """Put ``data`` where a recorded frame left it: its state before the last step, then
+    that step again with the torques then applied.
+
+    Parameters
+    ----------
+    state : ndarray, shape (nstate,)
+        :attr:`Recording.states` row.
+    last_ctrl : ndarray, shape (nu,)
+        The torques of the frame's last step, N m.
+    """
+    import mujoco
+
+    mujoco.mj_setState(sim, data, state, mujoco.mjtState.mjSTATE_INTEGRATION)
+    mujoco.mj_step1(sim, data)
+    data.ctrl[:] = last_ctrl
+    mujoco.mj_step2(sim, data)
+
+
+def _warnings(data) -> int:
+    return int(np.sum(data.warning.number))
 
 
 def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
@@ -106,20 +146,28 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
     import mujoco
 
     sim = control.sim
-    if recording is not None:
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    last_step = control.substeps - 1
+    recording_on = recording is not None
+    if recording_on:
         recording.begin(frame, gain)
+        warned = _warnings(scratch)
     cost = 0.0
     for t in range(frame + 1, last + 1):
         i = t - frame - 1
-        keep = recording is not None and i < recording.capacity
+        keep = recording_on and i < recording.capacity
         for j, k in enumerate(range((t - 1) * control.substeps, t * control.substeps)):
+            if keep and j == last_step:
+                mujoco.mj_getState(sim, scratch, recording.states[i], spec)
             applied, tau = control.step(scratch, k, mode, gain)
             if keep:
                 recording.ctrl[i, j] = applied
         if keep:
-            recording.tau[i] = tau
-            mujoco.mj_copyData(recording.snapshots[i], sim, scratch)
-            recording.frames = i + 1
+            if _warnings(scratch) != warned:
+                recording_on = False  # the counters differ from the run's from here on
+            else:
+                recording.tau[i] = tau
+                recording.frames = i + 1
         if not np.all(np.isfinite(scratch.qpos)):
             return math.inf, (t - frame) * control.substeps
         low = ref_pelvis_m[t] - scratch.xpos[pelvis_body, 2]
@@ -179,9 +227,9 @@ class Lookahead:
               here: int = 0) -> list[float]:
         """The rollout cost of each gain from ``data``'s state (not modified).
 
-        ``recordings``: one :class:`Recording` per gain, or None; the rollouts run in this
-        process are recorded (all of them on one process; on two, gain ``here``'s, and
-        the others run in the helper).
+        ``recordings``: one :class:`Recording` per gain, or None; every rollout is
+        recorded into its gain's (on two processes, gain ``here``'s runs in this process
+        and the others in the helper, whose recordings come back with their costs).
         """
         import mujoco
 
@@ -191,11 +239,11 @@ class Lookahead:
         if helped:
             pipe = self._start()
             others = tuple(g for i, g in enumerate(gains) if i != here)
-            pipe.send((integration_state(sim, data), frame, last, others, mode))
+            capacity = None if recordings is None else recordings[here].capacity
+            pipe.send((integration_state(sim, data), frame, last, others, mode, capacity))
             self._busy = True
         out = [math.nan] * len(gains)
         for i in local:
-            # an exact copy (warning counters included: the recording may become the run)
             mujoco.mj_copyData(self.scratch, sim, data)
             out[i] = self._cost(frame, last, gains[i], mode,
                                 None if recordings is None else recordings[i])
@@ -204,11 +252,12 @@ class Lookahead:
             self._busy = False
             if isinstance(reply, BaseException):
                 raise reply
-            costs, steps = reply
+            costs, steps, packed = reply
             self.steps += steps
-            for i, cost in zip([i for i in range(len(gains)) if i != here], costs,
-                               strict=True):
-                out[i] = cost
+            for n, i in enumerate(i for i in range(len(gains)) if i != here):
+                out[i] = costs[n]
+                if recordings is not None:
+                    recordings[i].unpack(packed[n])
         return out
 
     def _cost(self, frame, last, gain, mode, recording=None) -> float:
@@ -217,12 +266,12 @@ class Lookahead:
         self.steps += steps
         return cost
 
-    def _cost_from(self, state, frame, last, gain, mode) -> float:
+    def _cost_from(self, state, frame, last, gain, mode, recording=None) -> float:
         import mujoco
 
         mujoco.mj_setState(self.control.sim, self.scratch, state,
                            mujoco.mjtState.mjSTATE_INTEGRATION)
-        return self._cost(frame, last, gain, mode)
+        return self._cost(frame, last, gain, mode, recording)
 
     def _start(self):
         if self._helper is None:
@@ -237,6 +286,7 @@ class Lookahead:
     def _serve(self, pipe) -> None:
         # Ctrl-C goes to the whole process group: the parent handles it and ends this one
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        recordings_here = None
         while True:
             try:
                 job = pipe.recv()
@@ -244,11 +294,22 @@ class Lookahead:
                 return
             if job is None:
                 return
-            state, frame, last, gains, mode = job
+            state, frame, last, gains, mode, capacity = job
             try:
                 before = self.steps
-                costs = [self._cost_from(state, frame, last, g, mode) for g in gains]
-                pipe.send((costs, self.steps - before))
+                if capacity is None:
+                    recordings = [None] * len(gains)
+                else:
+                    if (recordings_here is None or len(recordings_here) < len(gains)
+                            or recordings_here[0].capacity != capacity):
+                        recordings_here = [Recording(self.control.sim, capacity,
+                                                     self.control.substeps)
+                                           for _ in range(len(gains))]
+                    recordings = recordings_here[:len(gains)]
+                costs = [self._cost_from(state, frame, last, g, mode, r)
+                         for g, r in zip(gains, recordings, strict=True)]
+                packed = [None if r is None else r.packed() for r in recordings]
+                pipe.send((costs, self.steps - before, packed))
             except Exception as error:  # noqa: BLE001 - handed to the parent, raised there
                 pipe.send(error)
 

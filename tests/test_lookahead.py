@@ -1,5 +1,6 @@
-"""The balance controller's lookahead rollouts: on two processes the same run as on one;
-the frames the run takes from a recorded rollout the same as simulating them again; the
+"""The balance controller's lookahead rollouts: on two processes the same run as on one,
+with the same frames taken from the rollouts; the frames the run takes from a recorded
+rollout the same as simulating them again; the
 helper process gone afterwards, and an error in the helper raised in the caller."""
 
 import multiprocessing
@@ -26,6 +27,10 @@ def test_two_processes_give_the_same_run(model02, short_walk):
     two = follow(model02, qpos, fps, processes=2)
     np.testing.assert_array_equal(one.ctrl, two.ctrl)
     np.testing.assert_array_equal(one.qpos, two.qpos)
+    # the helper's rollouts come back recorded: the run takes the chosen gain's frames
+    # whichever process rolled it out, so two processes do no more work than one
+    assert two.reused_steps == one.reused_steps > 0
+    assert two.lookahead_steps == one.lookahead_steps
     assert not multiprocessing.active_children()
 
 
@@ -51,8 +56,9 @@ def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short
     np.testing.assert_array_equal(reused.torque_nm, simulated.torque_nm)
     np.testing.assert_array_equal(reused.contact_force_n, simulated.contact_force_n)
     assert reused.simulated_steps == simulated.simulated_steps
-    # the work saved is counted: the frames taken, in physics steps, and nothing else
-    assert reused.reused_steps == sum(taken) * reused.substeps
+    # the work saved is counted: the frames taken, in physics steps, less the last step
+    # of each (taken again to restore the frame), and nothing else
+    assert reused.reused_steps == sum(taken) * (reused.substeps - 1)
     assert simulated.reused_steps == 0
     assert reused.lookahead_steps == simulated.lookahead_steps > reused.steps
 
