@@ -9,6 +9,7 @@ The JSON document (``schema`` = :data:`SCHEMA`, ``schema_version`` =
       "kind": "check" | "simulate",
       "motion": {name, frames, fps, seconds, skeleton, model, mass_kg, stature_m, ...},
       "settings": {thresholds and methods, with units in their names},
+      "software": {"python", "upm-controller", "mujoco", "numpy", "scipy", ...: versions},
       "totals": {"kinematic": {...}, "dynamics": {...}, "tracking": {mode: {...}}},
       "windows": [{"index", "start", "stop", "frames", ...meta,
                    "kinematic": {...}, "dynamics": {...}, "tracking": {mode: {...}}}],
@@ -24,6 +25,10 @@ Version 2: the free-root tracking is by default the balance controller
 ``com_height_error_m``, ``contact_force_peak_bw``/``_mean_bw``, ``torque_peak_nm``/
 ``_mean_nm``, ``torque_saturation_share``, ``wall_s_per_sim_s`` and
 ``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents).
+
+``software`` names the versions the figures were computed with: a free-root run is
+deterministic on one installation, but its search takes discrete decisions, so another
+MuJoCo or numpy release can change them (and a long sequence's figures with them).
 
 Frame numbers are 0-based frames of the (joined) motion; a window is the half-open
 frame range ``start:stop``; a frame's ``window`` is the index of the window it lies in
@@ -133,12 +138,31 @@ def build_report(kind: str, validity: Validity, *, motion: dict | None = None,
         "motion": dict(motion or {"name": validity.name, "frames": validity.n_frames,
                                   "fps": validity.fps}),
         "settings": dict(settings or {}),
+        "software": software_versions(),
         "totals": totals,
         "windows": windows,
         "pieces": piece_entries,
         "frames": frames,
     }
     return _clean(report)
+
+
+#: The distributions whose versions a report records (those the figures depend on).
+SOFTWARE = ("upm-controller", "mujoco", "numpy", "scipy", "quadprog", "numba")
+
+
+def software_versions() -> dict:
+    """The Python version and those of :data:`SOFTWARE` (``None`` where not installed)."""
+    import platform
+    from importlib import metadata
+
+    out = {"python": platform.python_version()}
+    for name in SOFTWARE:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
 
 
 def summary_rows(report: dict) -> list[dict]:

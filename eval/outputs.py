@@ -4,9 +4,9 @@ Deterministic (byte-identical for the same seed, whatever the number of workers)
 
 - ``scores.csv``: every score, long-form (kind, id, window, method, metric, value: every
   pair x window x method and every real window; :class:`eval.records.Records`);
-- ``results.json``: the protocol, every metric's definition and unit, every test clip,
-  every pair and real window (what they are; their scores are in scores.csv), and all the
-  statistics as long-form rows (:meth:`eval.summaries.Summaries.as_json`);
+- ``results.json``: the protocol, the software versions, every metric's definition and
+  unit, every test clip, every pair and real window (what they are; their scores are in
+  scores.csv), and all the statistics as long-form rows (:meth:`eval.summaries.Summaries.as_json`);
 - ``summary.csv`` (means and intervals), ``paired.csv`` (UPM - X), ``summary.md`` (the
   Markdown tables).
 
@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from controller.report import software_versions
 from eval.metrics import METRICS
 from eval.pairs import REAL_CONTEXT, SEGMENT_FRAMES, STUDY_FPS
 from eval.realdata import FLAT_FLOOR_MAX_BW
@@ -90,6 +91,7 @@ def results_document(result: StudyResult, statistics: Summaries) -> dict:
         "format": RESULTS_FORMAT,
         "format_version": RESULTS_VERSION,
         "protocol": protocol(result),
+        "software": software_versions(),
         "metrics": {name: spec.as_dict() for name, spec in METRICS.items()},
         "clips": result.clips,
         "pairs": result.pairs,
@@ -105,6 +107,7 @@ def machine_info() -> dict:
     import os
     import platform
 
+    import mujoco
     import scipy
     from threadpoolctl import threadpool_info
 
@@ -112,7 +115,7 @@ def machine_info() -> dict:
                    if i.get("user_api") == "blas"})
     return {"platform": platform.platform(terse=True), "processor": platform.machine(),
             "cpus": os.cpu_count(), "python": platform.python_version(),
-            "numpy": np.__version__, "scipy": scipy.__version__,
+            "numpy": np.__version__, "scipy": scipy.__version__, "mujoco": mujoco.__version__,
             "blas_threads": blas[0] if len(blas) == 1 else blas}
 
 

@@ -323,7 +323,8 @@ def table4_markdown(timing: dict) -> str:
         _table(header, rows),
         "",
         f"Machine: {machine['platform']}, {machine['cpus']} CPUs ({machine['processor']}), "
-        f"Python {machine['python']}, numpy {machine['numpy']}, scipy {machine['scipy']}; "
+        f"Python {machine['python']}, numpy {machine['numpy']}, scipy {machine['scipy']}, "
+        f"MuJoCo {machine['mujoco']}; "
         f"BLAS threads per process: {machine['blas_threads']}; {timing['workers']} worker "
         f"processes scoring in parallel (the timings include that load). Study wall time "
         f"{timing['wall_s']:.0f} s (loading or training the maps, and the scoring; not the "

@@ -73,6 +73,8 @@ def test_results_hold_every_pair_method_and_metric(study):
     assert protocol["pairs"] == 3 and protocol["windows"] == [10] and protocol["seed"] == 7
     assert set(protocol["train_subjects"]) >= {"02", "05", "83", "141"}
     assert not {"03", "16"} & set(protocol["train_subjects"])
+    import mujoco
+    assert results["software"]["mujoco"] == mujoco.__version__
     assert {c: results["clips"][c]["seen"] for c in ("16_15", "05_11")} == {
         "16_15": False, "05_11": True}
 
@@ -112,6 +114,7 @@ def test_timing_and_table4(study):
     # Speed is the benchmark's business, not a test's: only that the ratio is reported.
     assert timing["spacetime_over_upm"]["10"] > 0
     assert timing["machine"]["blas_threads"] == 1
+    assert "MuJoCo " in (study / "two" / "table4.md").read_text()
     assert "spacetime / UPM" in (study / "two" / "table4.md").read_text()
 
 

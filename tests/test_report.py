@@ -42,6 +42,9 @@ def test_report_has_every_part(analysed):
     assert free["start"] == 0 and free["stop"] == 120  # 0.5 s either side, clipped
     assert isinstance(free["fell"], bool)
     assert [p["name"] for p in report["pieces"]] == ["a", "b", "c"]
+    import mujoco
+    assert report["software"]["mujoco"] == mujoco.__version__
+    assert report["software"]["numpy"] == np.__version__
     frames = report["frames"]
     assert [f["window"] for f in frames[38:42]] == [None, None, 0, 0]
     assert "added_dofs" in frames[40] and "added_dofs" not in frames[39]
