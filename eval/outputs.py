@@ -103,19 +103,16 @@ def results_document(result: StudyResult, statistics: Summaries) -> dict:
 
 
 def machine_info() -> dict:
-    """The machine the timings come from."""
+    """The machine the timings come from, and the software (:func:`software_versions`)."""
     import os
     import platform
 
-    import mujoco
-    import scipy
     from threadpoolctl import threadpool_info
 
     blas = sorted({int(i.get("num_threads", 0)) for i in threadpool_info()
                    if i.get("user_api") == "blas"})
     return {"platform": platform.platform(terse=True), "processor": platform.machine(),
-            "cpus": os.cpu_count(), "python": platform.python_version(),
-            "numpy": np.__version__, "scipy": scipy.__version__, "mujoco": mujoco.__version__,
+            "cpus": os.cpu_count(), **software_versions(),
             "blas_threads": blas[0] if len(blas) == 1 else blas}
 
 

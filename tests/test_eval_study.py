@@ -5,6 +5,7 @@ with 2 worker processes and with none; bad arguments are one-line errors."""
 
 import json
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -73,7 +74,6 @@ def test_results_hold_every_pair_method_and_metric(study):
     assert protocol["pairs"] == 3 and protocol["windows"] == [10] and protocol["seed"] == 7
     assert set(protocol["train_subjects"]) >= {"02", "05", "83", "141"}
     assert not {"03", "16"} & set(protocol["train_subjects"])
-    import mujoco
     assert results["software"]["mujoco"] == mujoco.__version__
     assert {c: results["clips"][c]["seen"] for c in ("16_15", "05_11")} == {
         "16_15": False, "05_11": True}

@@ -5,6 +5,7 @@ import csv
 import json
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -42,7 +43,6 @@ def test_report_has_every_part(analysed):
     assert free["start"] == 0 and free["stop"] == 120  # 0.5 s either side, clipped
     assert isinstance(free["fell"], bool)
     assert [p["name"] for p in report["pieces"]] == ["a", "b", "c"]
-    import mujoco
     assert report["software"]["mujoco"] == mujoco.__version__
     assert report["software"]["numpy"] == np.__version__
     frames = report["frames"]
