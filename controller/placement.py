@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+from controller.kernels import damped_least_squares
+
 #: Share of the capture-offset difference the swing foot is moved by.
 PLACEMENT_GAIN = 0.3
 #: The largest shift of the swing foot, metres.
@@ -82,6 +84,11 @@ class FootPlacement:
                 qadr.append(int(model.jnt_qposadr[knee]))
             hips.append((np.array(dofs), np.array(qadr)))
         self.hips = hips
+        # which foot (0 left, 1 right) each body belongs to, -1 neither
+        self._side_of_body = [-1] * model.nbody
+        for side, bodies in enumerate(self.foot_bodies):
+            for b in bodies:
+                self._side_of_body[b] = side
         self._jacp = np.zeros((3, model.nv))
         # the reference's centre of mass, its velocity and the ankles, per frame
         data = mujoco.MjData(model)
@@ -128,13 +135,11 @@ class FootPlacement:
         n = data.ncon
         if not n:
             return out
-        bodies = self.model.geom_bodyid[np.asarray(data.contact.geom[:n])]
-        for b0, b1 in bodies:
-            if (b0 == 0) == (b1 == 0):
-                continue
-            b = b1 if b0 == 0 else b0
-            for side in range(2):
-                if b in self.foot_bodies[side]:
+        side_of_body = self._side_of_body
+        for b0, b1 in self.model.geom_bodyid[np.asarray(data.contact.geom[:n])].tolist():
+            if (b0 == 0) != (b1 == 0):
+                side = side_of_body[b0 + b1]  # the floor is body 0
+                if side >= 0:
                     out[side] = True
         return out
 
@@ -212,10 +217,8 @@ def _damped_least_squares(jac, move_m) -> np.ndarray:
     -------
     ndarray, shape (n,)
     """
-    jjt = jac @ jac.T
-    jjt[np.diag_indices_from(jjt)] += IK_DAMPING_M ** 2
-    turn = jac.T @ np.linalg.solve(jjt, move_m)
-    return np.clip(turn, -MAX_TURN_RAD, MAX_TURN_RAD)
+    return damped_least_squares(np.ascontiguousarray(jac), np.asarray(move_m, dtype=float),
+                                IK_DAMPING_M, MAX_TURN_RAD)
 
 
 def _descends(model, body: int, ancestor: int) -> bool:

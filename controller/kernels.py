@@ -1,0 +1,144 @@
+"""Compiled kernels of the balance controller's per-physics-step work (numba, cached on
+disk).
+
+The balance controller solves one small QP at every physics step (about 50 unknowns) and a
+small damped least-squares problem for its swing leg. Built with numpy, the QP's three
+dozen array calls cost more than their arithmetic and more than the solver; here each set-up
+is one call. :func:`qp_terms` gives the terms of the least-squares rows documented in
+:mod:`controller.wbc`, with ``x = [qdd_joints; lambda]``: the cost ``1/2 x^T P x - q^T x``
+and the inequalities ``C^T x >= d`` (quadprog's convention).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def qp_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_contact,
+             w_force, torque_scale, contact_damping, low, high):
+    """The QP of one control step.
+
+    Parameters
+    ----------
+    M : ndarray, shape (nv, nv)
+        Joint-space inertia; the free joint's DOFs are 0-5.
+    h : ndarray, shape (nv,)
+        Bias minus passive forces.
+    Jc : ndarray, shape (3 nc, nv)
+        Translational Jacobians of the nc planned floor contact points.
+    qvel, qdd_des : ndarray, shape (nv,)
+    edges : ndarray, shape (4, 3)
+        Unit edges of the friction pyramid (world frame).
+    weight_n : float
+        The body's weight, N (edge magnitudes are in body weights).
+    root_w : ndarray, shape (6,)
+        Weights of the root rows (already reduced when nothing touches the floor).
+    w_joints, w_contact, w_force : float
+    torque_scale : ndarray, shape (nv - 6,)
+        Weight of each hinge's torque per N m (the torque weight over its strength).
+    contact_damping : float
+        Desired contact-point acceleration per unit of its velocity, 1/s.
+    low, high : ndarray, shape (nv - 6,)
+        Each hinge's torque range, N m.
+
+    Returns
+    -------
+    P : ndarray, shape (n, n)
+        ``n = nv - 6 + 4 nc``.
+    q : ndarray, shape (n,)
+    C : ndarray, shape (n, 4 nc + 2 (nv - 6))
+    d : ndarray, shape (4 nc + 2 (nv - 6),)
+    G : ndarray, shape (nv, n)
+        ``qdd = G x + g0``.
+    g0 : ndarray, shape (nv,)
+    T : ndarray, shape (nv - 6, n)
+        ``tau_hinges = T x + t0``.
+    t0 : ndarray, shape (nv - 6,)
+    """
+    nv = M.shape[0]
+    nj = nv - 6
+    nc = Jc.shape[0] // 3
+    nl = 4 * nc
+    n = nj + nl
+    # generalised force of unit edge magnitudes (in body weights), (nv, nl)
+    Jl = np.zeros((nv, nl))
+    for i in range(nc):
+        for e in range(4):
+            for k in range(nv):
+                Jl[k, 4 * i + e] = weight_n * (edges[e, 0] * Jc[3 * i, k]
+                                               + edges[e, 1] * Jc[3 * i + 1, k]
+                                               + edges[e, 2] * Jc[3 * i + 2, k])
+    # the root rows solved for the root acceleration: qdd = G x + g0
+    Mrr_inv = np.linalg.inv(np.ascontiguousarray(M[:6, :6]))
+    G = np.zeros((nv, n))
+    G[:6, :nj] = -(Mrr_inv @ np.ascontiguousarray(M[:6, 6:]))
+    if nl:
+        G[:6, nj:] = Mrr_inv @ np.ascontiguousarray(Jl[:6])
+    for j in range(nj):
+        G[6 + j, j] = 1.0
+    g0 = np.zeros(nv)
+    g0[:6] = -(Mrr_inv @ np.ascontiguousarray(h[:6]))
+    G6 = np.ascontiguousarray(G[:6])
+
+    # least-squares rows, accumulated into P = A^T A and q = A^T b
+    R = np.empty((6, n))
+    for r in range(6):
+        R[r] = root_w[r] * G6[r]
+    P = R.T @ R
+    rb = root_w * (qdd_des[:6] - g0[:6])
+    q = R.T @ rb
+    wj2 = w_joints * w_joints
+    for j in range(nj):
+        P[j, j] += wj2
+        q[j] += wj2 * qdd_des[6 + j]
+    if nc:
+        JcG = Jc @ G
+        vc = Jc @ qvel
+        bc = -contact_damping * vc - Jc @ g0
+        wc2 = w_contact * w_contact
+        P += wc2 * (JcG.T @ JcG)
+        q += wc2 * (JcG.T @ bc)
+        wf2 = w_force * w_force
+        for i in range(nl):
+            P[nj + i, nj + i] += wf2
+    # hinge torques: T x + t0
+    Mj = np.ascontiguousarray(M[6:])
+    T = Mj @ G
+    for k in range(nj):
+        for i in range(nl):
+            T[k, nj + i] -= Jl[6 + k, i]
+    t0 = Mj @ g0 + h[6:]
+    ST = np.empty((nj, n))
+    for k in range(nj):
+        ST[k] = torque_scale[k] * T[k]
+    P += ST.T @ ST
+    q -= ST.T @ (torque_scale * t0)
+    for i in range(n):
+        P[i, i] += 1e-9
+    # C^T x >= d: lambda >= 0, low <= tau <= high
+    C = np.zeros((n, nl + 2 * nj))
+    for i in range(nl):
+        C[nj + i, i] = 1.0
+    for k in range(nj):
+        for i in range(n):
+            C[i, nl + k] = -T[k, i]
+            C[i, nl + nj + k] = T[k, i]
+    d = np.empty(nl + 2 * nj)
+    d[:nl] = 0.0
+    d[nl:nl + nj] = t0 - high
+    d[nl + nj:] = low - t0
+    return P, q, C, d, G, g0, T, t0
+
+
+@njit(cache=True, nogil=True)
+def damped_least_squares(jac, move, damping, max_turn):
+    """``clip(J^T (J J^T + damping^2 I)^-1 move, -max_turn, max_turn)``: the joint change
+    (rad) that moves a point by ``move`` (m) through its Jacobian ``jac`` (k, n), damped.
+    See :func:`controller.placement._damped_least_squares`."""
+    jjt = jac @ jac.T
+    for i in range(jjt.shape[0]):
+        jjt[i, i] += damping * damping
+    turn = jac.T @ np.linalg.solve(jjt, move)
+    return np.minimum(np.maximum(turn, -max_turn), max_turn)

@@ -1,0 +1,144 @@
+"""The whole-body QP (controller.wbc) on states of a real free-root walk (02_01): its
+compiled set-up (controller.kernels) is the least squares the module documents, built here
+again row by row with numpy; the solve that starts from the torque bounds near binding
+finds the minimiser of the QP with every bound; the swing leg's damped least squares is
+its formula."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+import quadprog
+
+from controller import to_qpos
+from controller.balance import follow
+from controller.kernels import damped_least_squares, qp_terms
+from controller.wbc import CONTACT_DAMPING, WholeBodyID
+
+
+@pytest.fixture(scope="module")
+def states(model02, walk):
+    """(solver, data copy, qdd_des, exclude) at every 7th control step of 1 s of 02_01."""
+    captured = []
+    solve = WholeBodyID.solve
+
+    def spy(self, data, qdd_des, contact_damping=None, exclude=()):
+        if len(captured) < 10_000:
+            copy = mujoco.MjData(self.model)
+            mujoco.mj_copyData(copy, self.model, data)
+            captured.append((self, copy, np.array(qdd_des), exclude))
+        return solve(self, data, qdd_des, contact_damping, exclude)
+
+    qpos = to_qpos(model02, walk)[:121]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(WholeBodyID, "solve", spy)
+        run = follow(model02, qpos, walk.fps, search_budget=0)
+    assert not run.fell
+    return captured[::7]
+
+
+def _terms(solver, data, exclude):
+    model, nv = solver.model, solver.nv
+    M = np.zeros((nv, nv))
+    mujoco.mj_fullM(model, data, M)
+    h = data.qfrc_bias - data.qfrc_passive
+    pts, bodies = solver.floor_contacts(data, exclude)
+    jacp = np.zeros((3, nv))
+    Jc = np.zeros((3 * len(pts), nv))
+    for i, (p, b) in enumerate(zip(pts, bodies, strict=True)):
+        mujoco.mj_jac(model, data, jacp, None, p, int(b))
+        Jc[3 * i:3 * i + 3] = jacp
+    return M, h, Jc
+
+
+def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des):
+    """A and b of the rows listed in controller.wbc, and qdd = G x + g0, tau = T x + t0."""
+    w, nv = solver.w, solver.nv
+    nj, nc = nv - 6, Jc.shape[0] // 3
+    nl = 4 * nc
+    Jl = np.zeros((nv, nl))
+    for i in range(nc):
+        Jl[:, 4 * i:4 * i + 4] = (solver.edges @ Jc[3 * i:3 * i + 3]).T * solver.weight_n
+    inv = np.linalg.inv(M[:6, :6])
+    G = np.zeros((nv, nj + nl))
+    G[:6, :nj] = -inv @ M[:6, 6:]
+    G[:6, nj:] = inv @ Jl[:6]
+    G[6:, :nj] = np.eye(nj)
+    g0 = np.zeros(nv)
+    g0[:6] = -inv @ h[:6]
+    root_w = solver.root_w if nc else solver.root_w * w.flight_root
+    T = M[6:] @ G
+    T[:, nj:] -= Jl[6:]
+    t0 = M[6:] @ g0 + h[6:]
+    scale = w.torque / solver.strength
+    rows = [root_w[:, None] * G[:6], w.joints * G[6:]]
+    rhs = [root_w * (qdd_des[:6] - g0[:6]), w.joints * qdd_des[6:]]
+    if nc:
+        rows += [w.contact * (Jc @ G), np.hstack([np.zeros((nl, nj)), w.force * np.eye(nl)])]
+        rhs += [w.contact * (-CONTACT_DAMPING * (Jc @ qvel) - Jc @ g0), np.zeros(nl)]
+    rows.append(scale[:, None] * T)
+    rhs.append(-scale * t0)
+    return np.vstack(rows), np.concatenate(rhs), G, g0, T, t0
+
+
+def test_states_have_contacts_and_flight_free_steps(states):
+    contacts = [len(s.floor_contacts(d, e)[0]) for s, d, _, e in states]
+    assert len(states) > 50 and min(contacts) >= 1 and max(contacts) >= 3
+
+
+def test_compiled_terms_are_the_documented_least_squares(states):
+    for solver, data, qdd_des, exclude in states:
+        M, h, Jc = _terms(solver, data, exclude)
+        A, b, G, g0, T, t0 = _least_squares_rows(solver, M, h, Jc, data.qvel, qdd_des)
+        w = solver.w
+        root_w = solver.root_w if Jc.shape[0] else solver.root_w * w.flight_root
+        P, q, C, d, G_, g0_, T_, t0_ = qp_terms(
+            M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n, root_w,
+            w.joints, w.contact, w.force, solver.torque_scale, CONTACT_DAMPING,
+            solver.low, solver.high)
+        P_ref = A.T @ A + 1e-9 * np.eye(A.shape[1])
+        np.testing.assert_allclose(P, P_ref, rtol=1e-9, atol=1e-9 * np.abs(P_ref).max())
+        np.testing.assert_allclose(q, A.T @ b, rtol=1e-9, atol=1e-9 * np.abs(A.T @ b).max())
+        for got, want in ((G_, G), (g0_, g0), (T_, T), (t0_, t0)):
+            np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+        # C^T x >= d is lambda >= 0 and low <= T x + t0 <= high
+        nl = P.shape[0] - (solver.nv - 6)
+        x = np.random.default_rng(0).normal(size=P.shape[0])
+        tau = T @ x + t0
+        np.testing.assert_allclose(C.T @ x - d, np.concatenate(
+            [x[solver.nv - 6:], solver.high - tau, tau - solver.low]), atol=1e-6)
+        assert C.shape[1] == nl + 2 * (solver.nv - 6)
+
+
+def test_solve_finds_the_minimiser_with_every_bound(states):
+    bound_hit = 0
+    for solver, data, qdd_des, exclude in states:
+        tau, qdd, normal = solver.solve(data, qdd_des, exclude=exclude)
+        M, h, Jc = _terms(solver, data, exclude)
+        A, b, G, g0, T, t0 = _least_squares_rows(solver, M, h, Jc, data.qvel, qdd_des)
+        n, nl = A.shape[1], A.shape[1] - (solver.nv - 6)
+        C = np.hstack([np.vstack([np.zeros((n - nl, nl)), np.eye(nl)]), -T.T, T.T])
+        d = np.concatenate([np.zeros(nl), t0 - solver.high, solver.low - t0])
+        x = quadprog.solve_qp(A.T @ A + 1e-9 * np.eye(n), A.T @ b, C, d, 0)[0]
+        want = (T @ x + t0)[solver.hinge_row]
+        scale = np.maximum(1.0, np.abs(want).max())
+        np.testing.assert_allclose(tau, want, atol=1e-6 * scale)
+        np.testing.assert_allclose(qdd, G @ x + g0, atol=1e-6 * np.abs(G @ x + g0).max())
+        low, high = solver.low[solver.hinge_row], solver.high[solver.hinge_row]
+        assert np.all(tau <= high + 1e-6) and np.all(tau >= low - 1e-6)
+        bound_hit += int(np.any(np.isclose(tau, high) | np.isclose(tau, low)))
+        assert normal >= 0.0
+    # the walk leans on its torque bounds: the case the trimmed solve must get right
+    assert bound_hit > 0
+
+
+def test_damped_least_squares_is_its_formula():
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        jac = rng.normal(size=(3, 4)) * 0.3
+        move = rng.normal(size=3) * 0.1
+        want = jac.T @ np.linalg.solve(jac @ jac.T + 0.05 ** 2 * np.eye(3), move)
+        want = np.clip(want, -math.radians(45), math.radians(45))
+        np.testing.assert_allclose(
+            damped_least_squares(jac, move, 0.05, math.radians(45)), want, atol=1e-12)
