@@ -142,3 +142,52 @@ def damped_least_squares(jac, move, damping, max_turn):
         jjt[i, i] += damping * damping
     turn = jac.T @ np.linalg.solve(jjt, move)
     return np.minimum(np.maximum(turn, -max_turn), max_turn)
+
+
+@njit(cache=True, nogil=True)
+def near_bounds(ctrl, actuator_of_hinge, low, high, strength, share):
+    """Which hinges' applied torque is within ``share`` of their strength of a bound:
+    bool (nh,). ``ctrl`` (nu,) in actuator order, the rest (nh,) in hinge order."""
+    out = np.empty(low.shape[0], dtype=np.bool_)
+    for k in range(low.shape[0]):
+        c = ctrl[actuator_of_hinge[k]]
+        out[k] = c > high[k] - share * strength[k] or c < low[k] + share * strength[k]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def bound_columns(C, d, nl, watched):
+    """The columns of ``C`` (n, nl + 2 nh) and ``d`` that the QP is solved with: the
+    forces' (the first ``nl``) and both torque bounds of the ``watched`` hinges (nh,)."""
+    nh = watched.shape[0]
+    cols = np.empty(nl + 2 * nh, dtype=np.int64)
+    m = 0
+    for i in range(nl):
+        cols[m] = i
+        m += 1
+    for side in range(2):
+        for k in range(nh):
+            if watched[k]:
+                cols[m] = nl + side * nh + k
+                m += 1
+    Cs = np.empty((C.shape[0], m))
+    ds = np.empty(m)
+    for j in range(m):
+        Cs[:, j] = C[:, cols[j]]
+        ds[j] = d[cols[j]]
+    return Cs, ds
+
+
+@njit(cache=True, nogil=True)
+def break_bounds(T, t0, x, low, high, tolerance, watched):
+    """The hinge torques ``T x + t0`` (nh,) of a solution, and whether they break a bound
+    of a hinge not ``watched``, by more than ``tolerance`` (nh,) N m; those hinges become
+    watched (in place)."""
+    tau = T @ x + t0
+    broken = False
+    for k in range(tau.shape[0]):
+        if not watched[k] and (tau[k] > high[k] + tolerance[k]
+                               or tau[k] < low[k] - tolerance[k]):
+            watched[k] = True
+            broken = True
+    return tau, broken

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import quadprog
 
-from controller.kernels import qp_terms
+from controller.kernels import bound_columns, break_bounds, near_bounds, qp_terms
 
 #: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
 CONTACT_DAMPING = 20.0
@@ -104,6 +104,7 @@ class WholeBodyID:
         self.root_w = root_w
         self.torque_scale = self.w.torque / self.strength
         self.actuator_of_hinge = np.argsort(self.hinge_row)
+        self.tolerance = BOUND_TOLERANCE * self.strength
 
     def floor_contacts(self, data, exclude=()):
         """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``,
@@ -153,7 +154,7 @@ class WholeBodyID:
         model, nv, w = self.model, self.nv, self.w
         M = self.M
         mujoco.mj_fullM(model, data, M)
-        h = np.asarray(data.qfrc_bias) - np.asarray(data.qfrc_passive)
+        h = np.subtract(data.qfrc_bias, data.qfrc_passive)
         pts, bodies = self.floor_contacts(data, exclude)
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
@@ -171,26 +172,22 @@ class WholeBodyID:
         # hinges whose applied torque (in the state) is near its bound, and solved again
         # with any bound its solution breaks, until it breaks none: the same minimiser
         # as with every bound (the problem is convex), at about half the solver's cost.
-        ctrl = np.asarray(data.ctrl)[self.actuator_of_hinge]
-        watched = (ctrl > self.high - NEAR_BOUND * self.strength) | (
-            ctrl < self.low + NEAR_BOUND * self.strength)
+        watched = near_bounds(data.ctrl, self.actuator_of_hinge, self.low, self.high,
+                              self.strength, NEAR_BOUND)
         while True:
-            rows = np.flatnonzero(watched)
-            cols = np.concatenate([np.arange(nl), nl + rows, nl + nj + rows])
+            Cs, ds = bound_columns(C, d, nl, watched)
             try:
-                x = (quadprog.solve_qp(P, q, C[:, cols], d[cols], 0)[0] if cols.size
+                x = (quadprog.solve_qp(P, q, Cs, ds, 0)[0] if ds.size
                      else np.linalg.solve(P, q))
             except (ValueError, np.linalg.LinAlgError):
                 # numerically infeasible: least squares, forces clipped at 0
                 x = np.linalg.lstsq(P, q, rcond=None)[0]
                 x[nj:] = np.maximum(x[nj:], 0.0)
                 break
-            tau_hinge = T @ x + t0
-            broken = ((tau_hinge > self.high + BOUND_TOLERANCE * self.strength)
-                      | (tau_hinge < self.low - BOUND_TOLERANCE * self.strength)) & ~watched
-            if not broken.any():
+            tau_hinge, broken = break_bounds(T, t0, x, self.low, self.high, self.tolerance,
+                                             watched)
+            if not broken:
                 break
-            watched |= broken
         lam = x[nj:]
         qdd = G @ x + g0
         tau_hinge = T @ x + t0
