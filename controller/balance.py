@@ -34,9 +34,12 @@ side by side (:mod:`controller.lookahead`: the same run either way). Where the c
 still gets into trouble (pelvis or head well below the reference's, or tilted), a
 backtracking search (:class:`_Search`, after SAMCON) runs the last segments again in other
 :data:`MODES` (placement gain, swing clearance, which swing-foot contacts the plan leans
-on) from their saved states. The controller's balance is thin (which walks it gets
-through changes with these choices), and the search buys robustness where it is needed,
-at the cost of the segments it runs again (``simulated_steps``).
+on) from their saved states; with ``processes=2`` the helper simulates the attempt the
+search would make next while this process runs the current one
+(:mod:`controller.search_ahead`: the same run either way). The controller's balance is
+thin (which walks it gets through changes with these choices), and the search buys
+robustness where it is needed, at the cost of the segments it runs again
+(``simulated_steps``).
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run. The controller has no
@@ -187,12 +190,13 @@ class BalanceRun:
         Segments run again by the search.
     simulated_steps : int
         Physics steps taken in all, the search's included (``steps`` of them are the
-        run's own), counting those taken from the lookahead's recording.
+        run's own), counting those taken from a recorded rollout.
     lookahead_steps : int
-        Physics steps the foot-placement gain's lookahead rollouts simulated (both
-        processes).
+        Physics steps the rollouts ahead simulated (both processes): the foot-placement
+        gain's lookahead and, on two processes, the search's guessed next attempts
+        (:mod:`controller.search_ahead`).
     reused_steps : int
-        Of ``simulated_steps``, those taken from a lookahead rollout instead of simulated
+        Of ``simulated_steps``, those taken from a recorded rollout instead of simulated
         again (all but the last step of each frame taken: that one is taken again to
         restore the frame). The physics steps simulated in all are ``simulated_steps -
         reused_steps + lookahead_steps``.
@@ -293,9 +297,11 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         :data:`SEARCH_BUDGET`; 0: no search).
     processes : int
         1 or 2: the foot-placement gain's lookahead rollouts run one after the other, or
-        side by side in this process and a forked helper (:mod:`controller.lookahead`).
-        The run is the same either way; 2 costs less wall time where 2 cores are free
-        (not inside a pool that already keeps every core busy).
+        side by side in this process and a forked helper (:mod:`controller.lookahead`),
+        which also simulates the search's next attempt ahead while the search runs
+        (:mod:`controller.search_ahead`). The run is the same either way; 2 costs less
+        wall time where 2 cores are free (not inside a pool that already keeps every
+        core busy).
 
     Returns
     -------
@@ -313,6 +319,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
     from controller.qpos import free_joint, joint_layout
+    from controller.search_ahead import SearchAhead
     from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.wbc import WholeBodyID
     from upm.progress import progress as progress_bar
@@ -389,8 +396,17 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                      (pelvis_body, head_site), budget)
     if processes not in (1, 2):
         raise ValueError(f"the balance controller runs on 1 or 2 processes, not {processes!r}")
-    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
+    selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes,
+                              stop=lambda d, frame: search.troubled(d, frame) or fatal(d))
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
+    ahead = (SearchAhead(selector.lookahead, sim, search.every, substeps, n_frames, MODES)
+             if selector is not None and processes == 2 and budget > 0 else None)
+
+    def restarted(back: int) -> None:
+        if ahead is not None:
+            segment = (back - 1) // search.every
+            ahead.restarted(search, segment, search.mode(back), search.quiet_until == 0)
+
     selected = {}
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
@@ -399,7 +415,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     with collected_warnings(), bar, helper:
         t = 1
         while t < n_frames:
-            search.enter(data, t)
+            if (search.enter(data, t) and ahead is not None and t > search.quiet_until
+                    and search.mode(t) > 0):
+                ahead.entered(search, t)
             mode = MODES[search.mode(t)]
             gain = mode.placement_gain
             recorded = None
@@ -412,8 +430,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 recorded = selector.recorded(t, gain)
             elif selector is not None:
                 selector.forget()
+            if recorded is None and ahead is not None:
+                recorded = ahead.frame(t)
             if recorded is not None:
-                # the lookahead simulated this frame already, from the same state
+                # a rollout ahead simulated this frame already, from the same state
                 state, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
                 restore_frame(sim, data, state, ctrl[t * substeps - 1])
                 steps += substeps
@@ -432,6 +452,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     t, fall, stop_frame = back, None, n_frames
                     if selector is not None:
                         selector.forget()
+                    restarted(back)
                     continue
                 diverged = t
                 stop_frame = t
@@ -444,6 +465,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                         del selected[first]
                     if selector is not None:
                         selector.forget()
+                    restarted(back)
                     continue
             qpos[t] = data.qpos
             contact[t] = _floor_normal_force(sim, data)
@@ -600,13 +622,15 @@ class _GainSelector:
     run on ``processes`` processes (:class:`controller.lookahead.Lookahead`)."""
 
     def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
-                 processes: int = 1):
+                 processes: int = 1, stop=None):
+        """``stop``: where a rollout run ahead for the search ends
+        (:meth:`controller.lookahead.Lookahead.send`)."""
         from controller.lookahead import Lookahead, Recording
 
         self.n_frames = n_frames
         self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
         self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
-        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes)
+        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes, stop)
         capacity = min(self.every_frames, self.lookahead_frames)
         self.recordings = [Recording(control.sim, capacity, control.substeps)
                            for _ in SELECT_GAINS]
@@ -690,8 +714,10 @@ class _Search:
     def _segment(self, t: int) -> int:
         return (t - 1) // self.every
 
-    def enter(self, data, t: int) -> None:
-        """Save the state at the start of a segment (before frame ``t``'s steps)."""
+    def enter(self, data, t: int) -> bool:
+        """Save the state at the start of a segment (before frame ``t``'s steps); returns
+        whether it was saved now (a segment entered for the first time since the run was
+        last restarted before it)."""
         import mujoco
 
         if (t - 1) % self.every == 0:
@@ -700,6 +726,8 @@ class _Search:
                 copy_ = mujoco.MjData(self.sim)
                 mujoco.mj_copyData(copy_, self.sim, data)
                 self.saved[i] = copy_
+                return True
+        return False
 
     def _mode_of(self, i: int, choice: dict | None = None) -> int:
         """Segment ``i``'s mode: its own choice, else that of the latest segment before
@@ -720,8 +748,10 @@ class _Search:
         return np.array([self._mode_of(i) for i in range(n)], dtype=int)
 
     def in_trouble(self, data, t: int) -> bool:
-        if t <= self.quiet_until:
-            return False
+        return t > self.quiet_until and self.troubled(data, t)
+
+    def troubled(self, data, t: int) -> bool:
+        """Whether the character is in trouble at frame ``t`` (quiet or not)."""
         low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
         bent = self.ref_head[t] - data.site_xpos[self.head_site, 2] > TROUBLE_HEAD_DROP_M
         return bool(low or bent or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
@@ -736,18 +766,34 @@ class _Search:
         """
         if self.best is None or t > self.best[0]:
             self.best = (t, dict(self.choice))
+        spent = steps >= self.budget_steps
+        back = self._back(t)
+        if spent or back is None:
+            return self._give_up(data, t, spent)
+        choice = dict(self.choice)
+        choice[back] = self._mode_of(back) + 1
+        return self._restart(data, back, {j: m for j, m in choice.items() if j <= back})
+
+    def _back(self, t: int) -> int | None:
+        """The segment a retry at frame ``t`` goes back to (in its next mode), or None
+        (no mode left within reach)."""
         i = self._segment(t)
         back = i
         while back >= 0 and i - back <= MAX_BACKTRACK:
             if self._mode_of(back) + 1 < len(MODES):
                 break
             back -= 1
-        spent = steps >= self.budget_steps
-        if spent or back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
-            return self._give_up(data, t, spent)
-        choice = dict(self.choice)
-        choice[back] = self._mode_of(back) + 1
-        return self._restart(data, back, {j: m for j, m in choice.items() if j <= back})
+        if back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
+            return None
+        return back
+
+    def next_attempt(self, t: int):
+        """The attempt a retry at frame ``t`` would start, if the budget is not spent by
+        then: ``(segment, its mode, its saved start state)``, or None."""
+        back = self._back(t)
+        if back is None:
+            return None
+        return back, self._mode_of(back) + 1, self.saved[back]
 
     def _give_up(self, data, t: int, spent: bool) -> int | None:
         best_t, best_choice = self.best

@@ -120,7 +120,7 @@ def _warnings(data) -> int:
 
 def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
                  ref_pelvis_m, pelvis_body: int,
-                 recording: Recording | None = None) -> tuple[float, int]:
+                 recording: Recording | None = None, stop=None) -> tuple[float, int]:
     """How far one rollout strays: the sum over frames ``frame + 1 .. last`` of how far
     the pelvis is below the reference's (m, zero when above), one minus its up axis's
     vertical component, and :data:`VELOCITY_WEIGHT_S` times the root's horizontal
@@ -142,6 +142,9 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
     pelvis_body : int
     recording : Recording, optional
         Keeps the rollout's first frames, up to its capacity.
+    stop : callable, optional
+        ``stop(data, t) -> bool``: the rollout ends after the first frame ``t`` for which
+        it is true (that frame recorded).
     """
     import mujoco
 
@@ -170,6 +173,8 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
                 recording.frames = i + 1
         if not np.all(np.isfinite(scratch.qpos)):
             return math.inf, (t - frame) * control.substeps
+        if stop is not None and stop(scratch, t):
+            return cost, (t - frame) * control.substeps
         low = ref_pelvis_m[t] - scratch.xpos[pelvis_body, 2]
         tilt = 1.0 - scratch.xmat[pelvis_body, 8]
         cost += max(0.0, low) + tilt
@@ -204,7 +209,8 @@ class Lookahead:
         at the first call that needs it and ends with :meth:`close` (or this process).
     """
 
-    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1):
+    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1,
+                 stop=None):
         import mujoco
 
         if processes not in (1, 2):
@@ -216,6 +222,7 @@ class Lookahead:
         self.ref_pelvis_m = ref_pelvis_m
         self.pelvis_body = pelvis_body
         self.processes = processes
+        self.stop = stop
         self.scratch = mujoco.MjData(control.sim)
         self._helper = None
         self._pipe = None
@@ -234,13 +241,15 @@ class Lookahead:
         import mujoco
 
         sim = self.control.sim
+        self.receive()  # a rollout started ahead and not wanted any more
         helped = self.processes == 2 and len(gains) > 1
         local = [here] if helped else list(range(len(gains)))
         if helped:
             pipe = self._start()
             others = tuple(g for i, g in enumerate(gains) if i != here)
             capacity = None if recordings is None else recordings[here].capacity
-            pipe.send((integration_state(sim, data), frame, last, others, mode, capacity))
+            pipe.send((integration_state(sim, data), frame, last, others, mode, capacity,
+                       False))
             self._busy = True
         out = [math.nan] * len(gains)
         for i in local:
@@ -260,18 +269,47 @@ class Lookahead:
                     recordings[i].unpack(packed[n])
         return out
 
-    def _cost(self, frame, last, gain, mode, recording=None) -> float:
+    def send(self, data, frame: int, last: int, gain: float, mode,
+             recording: Recording) -> None:
+        """Start one recorded rollout from ``data``'s state in the helper (two processes
+        only), to be taken with :meth:`receive`; this process goes on meanwhile. It ends
+        early where the ``stop`` test given at construction says so."""
+        if self.processes != 2:
+            raise ValueError("a rollout runs ahead only on 2 processes")
+        self.receive()
+        pipe = self._start()
+        pipe.send((integration_state(self.control.sim, data), frame, last, (gain,), mode,
+                   recording.capacity, True))
+        self._busy = True
+
+    def receive(self, recording: Recording | None = None) -> bool:
+        """Wait for the rollout :meth:`send` started, if one is outstanding, and unpack
+        its recording into ``recording`` (None: drop it). Returns whether there was one."""
+        if not self._busy:
+            return False
+        reply = self._pipe.recv()
+        self._busy = False
+        if isinstance(reply, BaseException):
+            raise reply
+        _, steps, packed = reply
+        self.steps += steps
+        if recording is not None:
+            recording.unpack(packed[0])
+        return True
+
+    def _cost(self, frame, last, gain, mode, recording=None, stop=None) -> float:
         cost, steps = rollout_cost(self.control, self.scratch, frame, last, gain, mode,
-                                   self.ref_pelvis_m, self.pelvis_body, recording)
+                                   self.ref_pelvis_m, self.pelvis_body, recording, stop)
         self.steps += steps
         return cost
 
-    def _cost_from(self, state, frame, last, gain, mode, recording=None) -> float:
+    def _cost_from(self, state, frame, last, gain, mode, recording=None,
+                   stop=None) -> float:
         import mujoco
 
         mujoco.mj_setState(self.control.sim, self.scratch, state,
                            mujoco.mjtState.mjSTATE_INTEGRATION)
-        return self._cost(frame, last, gain, mode, recording)
+        return self._cost(frame, last, gain, mode, recording, stop)
 
     def _start(self):
         if self._helper is None:
@@ -294,7 +332,8 @@ class Lookahead:
                 return
             if job is None:
                 return
-            state, frame, last, gains, mode, capacity = job
+            state, frame, last, gains, mode, capacity, stops = job
+            stop = self.stop if stops else None
             try:
                 before = self.steps
                 if capacity is None:
@@ -306,7 +345,7 @@ class Lookahead:
                                                      self.control.substeps)
                                            for _ in range(len(gains))]
                     recordings = recordings_here[:len(gains)]
-                costs = [self._cost_from(state, frame, last, g, mode, r)
+                costs = [self._cost_from(state, frame, last, g, mode, r, stop)
                          for g, r in zip(gains, recordings, strict=True)]
                 packed = [None if r is None else r.packed() for r in recordings]
                 pipe.send((costs, self.steps - before, packed))
