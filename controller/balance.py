@@ -58,7 +58,9 @@ Per-frame figures (``BalanceRun``):
 - ``com_height_error_m``: simulated minus reference centre-of-mass height;
 - ``contact_force_n``: total normal force of the floor on the body;
 - ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
-  step, and whether the controller asked for more than the joint's strength.
+  step, and whether the controller asked for the joint's whole strength or more (the QP
+  keeps its torques within the strength, so a bound it leans on is met to rounding:
+  within :data:`SATURATION_TOLERANCE` of the strength counts as at it).
 
 The character has **fallen** when its pelvis or head is below half its standing height
 while the reference's is not (:mod:`controller.falls`); the simulation then
@@ -91,6 +93,8 @@ DAMPING_RATIO = 1.0
 MAX_ACCELERATION = 300.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
+#: A planned torque within this share of the joint's strength of a bound is at it.
+SATURATION_TOLERANCE = 1e-6
 
 
 class Mode(NamedTuple):
@@ -338,6 +342,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
     torque_range = _torque_range(sim)
     low_nm, high_nm = torque_range.T
+    strength_nm = np.maximum(np.abs(low_nm), np.abs(high_nm))
+    at_bound_nm = SATURATION_TOLERANCE * np.where(np.isfinite(strength_nm), strength_nm, 0.0)
     solver = WholeBodyID(sim, joint_dofs, torque_range)
 
     layout = joint_layout(sim)
@@ -443,7 +449,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     applied, tau = control.step(data, k, mode, gain)
                     ctrl[k] = applied
                     steps += 1
-            saturated[t] = (tau < low_nm) | (tau > high_nm)
+            saturated[t] = (tau <= low_nm + at_bound_nm) | (tau >= high_nm - at_bound_nm)
             bar.n = max(bar.n, t)
             bar.refresh() if progress else None
             if fatal(data) or not np.all(np.isfinite(data.qpos)):

@@ -142,3 +142,20 @@ def test_pose_errors_leave_drift_and_heading_apart(model02, walk_qpos):
     bent[:, joint_layout(model02).qpos_address[knee]] += np.deg2rad(20)
     joint, body, drift, com = reference_errors(model02, bent, ref)
     assert np.all(joint > 0) and np.all(body > 5.0) and np.all(drift == 0)
+
+
+def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_run):
+    # the QP keeps its torques within each joint's strength, so a bound it leans on is
+    # met to rounding: those frames count as saturated, whichever side of it rounding
+    # put the planned torque, and the torque applied there is the strength itself
+    from controller.balance import SATURATION_TOLERANCE
+
+    run = walk_run
+    low, high = torque_model(model02).actuator_forcerange.T
+    tol = SATURATION_TOLERANCE * np.maximum(-low, high)
+    up = np.all(np.isfinite(run.torque_nm), axis=1)
+    up[0] = False
+    torque = run.torque_nm[up]
+    at_bound = (torque <= low + tol) | (torque >= high - tol)
+    np.testing.assert_array_equal(run.torque_saturated[up], at_bound)
+    assert 0 < at_bound.mean() < 0.2
