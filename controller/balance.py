@@ -403,7 +403,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     if processes not in (1, 2):
         raise ValueError(f"the balance controller runs on 1 or 2 processes, not {processes!r}")
     selector = (_GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes,
-                              stop=lambda d, frame: search.troubled(d, frame) or fatal(d))
+                              stop=search.troubled)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
     ahead = (SearchAhead(selector.lookahead, sim, search.every, substeps, n_frames, MODES)
              if selector is not None and processes == 2 and budget > 0 else None)
