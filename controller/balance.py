@@ -637,27 +637,48 @@ class _GainSelector:
         self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
         self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
         self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes, stop)
-        capacity = min(self.every_frames, self.lookahead_frames)
+        # on one process the chosen rollout is recorded whole: the next choice goes on
+        # from its second half instead of simulating it again
+        self.resumes = processes == 1
+        capacity = (self.lookahead_frames if self.resumes
+                    else min(self.every_frames, self.lookahead_frames))
         self.recordings = [Recording(control.sim, capacity, control.substeps)
                            for _ in SELECT_GAINS]
         self.chain = None
         self.last_choice = 0
+        self.last_cost = math.inf
 
     def choose(self, data, frame: int) -> float:
         """The gain from frame ``frame`` on (``data``: the state after it). Every gain's
         rollout is recorded for :meth:`recorded` (on two processes, the one expected to
         win, the gain chosen last time, runs in this process)."""
         last = min(self.n_frames - 1, frame + self.lookahead_frames)
-        self.forget()
+        resume = self._resumable(frame)
+        self.forget(keep=resume)
         costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0],
-                                     self.recordings, here=self.last_choice)
+                                     self.recordings, here=self.last_choice, resume=resume)
         self.chain = frame
         best, best_cost = 0, math.inf
         for i, cost in enumerate(costs):
             if cost < best_cost:
                 best, best_cost = i, cost
-        self.last_choice = best
+        self.last_choice, self.last_cost = best, best_cost
         return SELECT_GAINS[best]
+
+    def _resumable(self, frame: int) -> int | None:
+        """The last choice's gain, if its rollout can go on from ``frame`` (one process,
+        the run took every frame up to ``frame`` from it, and it recorded every frame it
+        simulated, finite): its recording is moved on to start after ``frame``."""
+        if not self.resumes or self.chain != frame:
+            return None
+        recording = self.recordings[self.last_choice]
+        start = recording.start_frame
+        ended = min(self.n_frames - 1, start + self.lookahead_frames)
+        if (start < 0 or recording.gain != SELECT_GAINS[self.last_choice] or ended <= frame
+                or recording.frames != ended - start or not math.isfinite(self.last_cost)):
+            return None
+        recording.advance(frame - start)
+        return self.last_choice
 
     def recorded(self, t: int, gain: float):
         """Frame ``t`` as the last choice's rollout simulated it, if the run is still on
@@ -673,10 +694,12 @@ class _GainSelector:
         self.chain = t if out is not None else None
         return out
 
-    def forget(self) -> None:
-        """The run went back: nothing recorded is its future any more."""
-        for recording in self.recordings:
-            recording.clear()
+    def forget(self, keep: int | None = None) -> None:
+        """The run went back: nothing recorded is its future any more (but gain
+        ``keep``'s recording, which goes on)."""
+        for i, recording in enumerate(self.recordings):
+            if i != keep:
+                recording.clear()
         self.chain = None
 
     def close(self) -> None:
