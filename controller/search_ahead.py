@@ -43,8 +43,6 @@ class SearchAhead:
         self.recording = Recording(sim, every, substeps)
         self.guess = None  # (restart count, segment, mode) simulated ahead, not yet taken
         self.chain = None  # the last frame taken from the recording, while on it
-        #: frames taken from the recording
-        self.frames_taken = 0
 
     def restarted(self, search, segment: int, mode: int, searching: bool) -> None:
         """``search`` (:class:`controller.balance._Search`) has just restarted the run
@@ -66,6 +64,7 @@ class SearchAhead:
         segment: guess that the attempt gets into trouble in this segment, and simulate
         the attempt the search would make next (:meth:`controller.balance._Search.
         next_attempt`) ahead, until it gets into trouble or its first segment ends."""
+        self.guess = None  # an earlier guess still running is dropped when it returns
         nxt = search.next_attempt(t)
         if nxt is None:
             return
@@ -87,9 +86,4 @@ class SearchAhead:
             return None
         out = self.recording.frame(t, self.recording.gain)
         self.chain = t if out is not None else None
-        self.frames_taken += out is not None
         return out
-
-    def forget(self) -> None:
-        """The run left the attempt (another restart follows)."""
-        self.chain = None
