@@ -179,15 +179,14 @@ def bound_columns(C, d, nl, watched):
 
 
 @njit(cache=True, nogil=True)
-def break_bounds(T, t0, x, low, high, tolerance, watched):
-    """The hinge torques ``T x + t0`` (nh,) of a solution, and whether they break a bound
-    of a hinge not ``watched``, by more than ``tolerance`` (nh,) N m; those hinges become
-    watched (in place)."""
-    tau = T @ x + t0
+def break_bounds(tau, low, high, tolerance, watched):
+    """Whether the hinge torques ``tau`` (nh,) of a solution break a bound of a hinge not
+    ``watched`` by more than ``tolerance`` (nh,) N m; those hinges become watched (in
+    place)."""
     broken = False
     for k in range(tau.shape[0]):
         if not watched[k] and (tau[k] > high[k] + tolerance[k]
                                or tau[k] < low[k] - tolerance[k]):
             watched[k] = True
             broken = True
-    return tau, broken
+    return broken

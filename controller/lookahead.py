@@ -286,8 +286,10 @@ class Lookahead:
         import mujoco
 
         sim = self.control.sim
-        self.receive()  # a rollout started ahead and not wanted any more
         helped = self.processes == 2 and len(gains) > 1
+        if resume is not None and (helped or recordings is None):
+            raise ValueError("a rollout is resumed on one process, from its recording")
+        self.receive()  # a rollout started ahead and not wanted any more
         local = [here] if helped else list(range(len(gains)))
         if helped:
             pipe = self._start()
@@ -296,8 +298,6 @@ class Lookahead:
             pipe.send((integration_state(sim, data), frame, last, others, mode, capacity,
                        False))
             self._busy = True
-        if resume is not None and (helped or recordings is None):
-            raise ValueError("a rollout is resumed on one process, from its recording")
         out = [math.nan] * len(gains)
         for i in local:
             if i != resume:

@@ -162,6 +162,8 @@ class WholeBodyID:
             mujoco.mj_jac(model, data, self._jacp, None, pts[i], int(bodies[i]))
             Jc[3 * i:3 * i + 3] = self._jacp
         nj = nv - 6
+        # Without floor contact nothing but the limbs' reaction turns the root: asking for
+        # a root acceleration would only fling the limbs.
         root_w = self.root_w if nc else self.root_w * w.flight_root
         P, q, C, d, G, g0, T, t0 = qp_terms(
             M, h, Jc, np.asarray(data.qvel), np.asarray(qdd_des, dtype=float), self.edges,
@@ -183,14 +185,13 @@ class WholeBodyID:
                 # numerically infeasible: least squares, forces clipped at 0
                 x = np.linalg.lstsq(P, q, rcond=None)[0]
                 x[nj:] = np.maximum(x[nj:], 0.0)
+                tau_hinge = T @ x + t0
                 break
-            tau_hinge, broken = break_bounds(T, t0, x, self.low, self.high, self.tolerance,
-                                             watched)
-            if not broken:
+            tau_hinge = T @ x + t0
+            if not break_bounds(tau_hinge, self.low, self.high, self.tolerance, watched):
                 break
         lam = x[nj:]
         qdd = G @ x + g0
-        tau_hinge = T @ x + t0
         tau = tau_hinge[self.hinge_row]
         normal = float(np.sum(lam.reshape(-1, 4) @ self.edges[:, 2]) * self.weight_n) if nc else 0.0
         return tau, qdd, normal
