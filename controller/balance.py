@@ -78,6 +78,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from controller.contacts import floor_contacts
+from controller.kernels import clip_targets, desired_acceleration, reference_at
+
 #: Seconds simulated after a fall before the run stops.
 AFTER_FALL_S = 1.0
 #: The start's lowest point is this far into the floor (a contact from the first step).
@@ -537,6 +540,9 @@ class _Control:
         self.low, self.high = target_range
         self.low_nm, self.high_nm = np.asarray(torque_range).T
         self.q_ref = np.empty(sim.nq)
+        self.qd_ref = np.empty(sim.nv)
+        self.qdd_ref = np.empty(sim.nv)
+        self.qdd_des = np.empty(sim.nv)
         self.err = np.zeros(sim.nv)
         self.toes = {b for b in range(sim.nbody)
                      if "toes" in (mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_BODY, b) or "")}
@@ -563,52 +569,46 @@ class _Control:
         torques, (nu,) each."""
         import mujoco
 
-        sim, n_frames, q_ref, err = self.sim, self.n_frames, self.q_ref, self.err
+        sim, n_frames, q_ref, qd_ref, qdd_ref = (self.sim, self.n_frames, self.q_ref,
+                                                 self.qd_ref, self.qdd_ref)
         s = k / self.substeps
         i = min(int(s), n_frames - 2)
-        w = s - i
-        _interpolate(self.smooth[i], self.smooth[i + 1], w, q_ref)
-        qd_ref = (1 - w) * self.ref_qvel[i] + w * self.ref_qvel[i + 1]
-        qdd_ref = (1 - w) * self.ref_qacc[i] + w * self.ref_qacc[i + 1]
+        reference_at(self.smooth, self.ref_qvel, self.ref_qacc, i, s - i, q_ref, qd_ref,
+                     qdd_ref)
         mujoco.mj_step1(sim, data)
         frame = min(int(round(s)), n_frames - 1)
+        floor = floor_contacts(sim, data)
+        floor_bodies = floor[1].tolist()
         if PLACEMENT:
             gain = mode.placement_gain if gain is None else gain
-            self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m)
-        self._flatten_toes(data, q_ref)
+            self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m,
+                                  floor_bodies)
+        self._flatten_toes(data, q_ref, floor_bodies)
         # targets inside the joint ranges: the limits' forces are not in the plan
-        hinge = q_ref[self.hinge_q]
-        clipped = (hinge < self.low) | (hinge > self.high)
-        if clipped.any():
-            q_ref[self.hinge_q] = np.clip(hinge, self.low, self.high)
-            qd_ref[self.hinge_v[clipped]] = 0.0
-            qdd_ref[self.hinge_v[clipped]] = 0.0
-        mujoco.mj_differentiatePos(sim, err, 1.0, data.qpos, q_ref)
-        qdd_des = qdd_ref + self.kp * err + self.kd * (qd_ref - data.qvel)
-        np.clip(qdd_des, -MAX_ACCELERATION, MAX_ACCELERATION, out=qdd_des)
+        clip_targets(q_ref, qd_ref, qdd_ref, self.hinge_q, self.hinge_v, self.low, self.high)
+        mujoco.mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
+        desired_acceleration(qdd_ref, self.kp, self.err, self.kd, qd_ref, data.qvel,
+                             MAX_ACCELERATION, self.qdd_des)
         tau, _, _ = self.solver.solve(
-            data, qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame))
+            data, self.qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame),
+            floor=floor)
         applied = np.clip(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied
         mujoco.mj_step2(sim, data)
         return applied, tau
 
-    def _flatten_toes(self, data, q_ref) -> None:
+    def _flatten_toes(self, data, q_ref, floor_bodies) -> None:
         """A toe pressed on the floor yields until it lies flat: its target in ``q_ref``
         (in place) becomes the angle at which its capsule is level (to first order).
+        ``floor_bodies``: the bodies of the state's floor contacts (list of int).
 
         The toe's strength (about 20 N m) cannot carry the body on the toe's tip: a human
         forefoot bears weight on the ball with the toes pressed flat (the MTP joint
         dorsiflexed by the floor), and a tracked toe angle from mocap would keep the tip
         down and the ball off the floor.
         """
-        n = data.ncon
-        if not n:
-            return
-        bodies = self.sim.geom_bodyid[data.contact.geom[:n]]
-        on_floor = bodies[(bodies == 0).any(axis=1)].ravel()
         for body, hinge, qadr, geom in self.toe_hinges:
-            if body not in on_floor:
+            if body not in floor_bodies:
                 continue
             # the capsule's axis, and how fast its height changes as the hinge turns (the
             # vertical component of axis x direction; either sign of either will do)
@@ -947,16 +947,6 @@ def _gains(nv: int):
     kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
     kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
     return kp, kd
-
-
-def _interpolate(a, b, w: float, out) -> None:
-    """``out`` = qpos between two frames: linear, the root quaternion normalised
-    (same hemisphere)."""
-    np.multiply(a, 1 - w, out=out)
-    out += w * b
-    qa, qb = a[3:7], b[3:7]
-    quat = (1 - w) * qa + w * (qb if qa @ qb >= 0 else -qb)
-    out[3:7] = quat / np.linalg.norm(quat)
 
 
 def _floor_normal_force(model, data) -> float:

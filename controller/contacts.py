@@ -83,6 +83,27 @@ class ContactTable:
         return out
 
 
+def floor_contacts(model, data) -> tuple[np.ndarray, np.ndarray]:
+    """The state's floor contacts (as computed: after ``mj_step1`` or ``mj_forward``).
+
+    Returns
+    -------
+    index : ndarray of int, shape (m,)
+        Which of ``data.contact`` touch the floor, in contact order.
+    body : ndarray of int, shape (m,)
+        The body each of them touches the floor with.
+    """
+    from controller.kernels import floor_contact_index
+
+    n = data.ncon
+    if not n:
+        return _NO_CONTACT
+    return floor_contact_index(data.contact.geom[:n], model.geom_bodyid)
+
+
+_NO_CONTACT = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+
+
 def collide(model, data, qpos) -> None:
     """Set ``data.qpos`` and compute positions and contacts (``mj_kinematics`` +
     ``mj_collision``; no velocities, no dynamics)."""

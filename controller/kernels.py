@@ -135,8 +135,8 @@ def qp_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_conta
 @njit(cache=True, nogil=True)
 def damped_least_squares(jac, move, damping, max_turn):
     """``clip(J^T (J J^T + damping^2 I)^-1 move, -max_turn, max_turn)``: the joint change
-    (rad) that moves a point by ``move`` (m) through its Jacobian ``jac`` (k, n), damped.
-    See :func:`controller.placement._damped_least_squares`."""
+    (rad) that moves a point by ``move`` (m) through its Jacobian ``jac`` (k, n) (m/rad),
+    damped by ``damping`` (m), each joint's change within +-``max_turn`` (rad)."""
     jjt = jac @ jac.T
     for i in range(jjt.shape[0]):
         jjt[i, i] += damping * damping
@@ -190,3 +190,116 @@ def break_bounds(tau, low, high, tolerance, watched):
             watched[k] = True
             broken = True
     return broken
+
+
+@njit(cache=True, nogil=True)
+def floor_contact_index(geom, geom_bodyid):
+    """The contacts between the floor (body 0) and a body of the humanoid.
+
+    Parameters
+    ----------
+    geom : ndarray of int, shape (n, 2)
+        The geoms of each of the state's contacts.
+    geom_bodyid : ndarray of int, shape (ngeom,)
+
+    Returns
+    -------
+    index : ndarray of int, shape (m,)
+        Which contacts touch the floor, in contact order.
+    body : ndarray of int, shape (m,)
+        The body each of them touches the floor with.
+    """
+    n = geom.shape[0]
+    index = np.empty(n, dtype=np.int64)
+    body = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        b0 = geom_bodyid[geom[i, 0]]
+        b1 = geom_bodyid[geom[i, 1]]
+        if (b0 == 0) != (b1 == 0):
+            index[m] = i
+            body[m] = b0 + b1
+            m += 1
+    return index[:m], body[:m]
+
+
+@njit(cache=True, nogil=True)
+def reference_at(qpos, qvel, qacc, i, w, q_out, qd_out, qdd_out):
+    """The reference between frames ``i`` and ``i + 1`` at weight ``w`` (0: frame i),
+    linear, the root quaternion (qpos 3-6) normalised in the first frame's hemisphere.
+
+    Parameters
+    ----------
+    qpos : ndarray, shape (T, nq)
+    qvel, qacc : ndarray, shape (T, nv)
+    i : int
+    w : float
+    q_out : ndarray, shape (nq,)
+    qd_out, qdd_out : ndarray, shape (nv,)
+        Written in place.
+    """
+    a, b = qpos[i], qpos[i + 1]
+    for j in range(a.shape[0]):
+        q_out[j] = a[j] * (1 - w) + w * b[j]
+    sign = 1.0 if np.dot(a[3:7], b[3:7]) >= 0 else -1.0
+    quat = (1 - w) * a[3:7] + w * (sign * b[3:7])
+    q_out[3:7] = quat / np.sqrt(np.dot(quat, quat))
+    va, vb, aa, ab = qvel[i], qvel[i + 1], qacc[i], qacc[i + 1]
+    for j in range(va.shape[0]):
+        qd_out[j] = (1 - w) * va[j] + w * vb[j]
+        qdd_out[j] = (1 - w) * aa[j] + w * ab[j]
+
+
+@njit(cache=True, nogil=True)
+def clip_targets(q_ref, qd_ref, qdd_ref, hinge_q, hinge_v, low, high):
+    """Hinge targets inside the joint ranges, in place: a clipped hinge's target velocity
+    and acceleration become 0. ``hinge_q``, ``hinge_v``, ``low``, ``high`` (nh,): each
+    hinge's qpos and DOF address and range, rad."""
+    for k in range(hinge_q.shape[0]):
+        angle = q_ref[hinge_q[k]]
+        if angle < low[k] or angle > high[k]:
+            q_ref[hinge_q[k]] = min(max(angle, low[k]), high[k])
+            qd_ref[hinge_v[k]] = 0.0
+            qdd_ref[hinge_v[k]] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def desired_acceleration(qdd_ref, kp, err, kd, qd_ref, qvel, max_acceleration, out):
+    """``out`` = ``qdd_ref + kp err + kd (qd_ref - qvel)`` within +-``max_acceleration``,
+    all (nv,) (NaN stays NaN, as with ``np.clip``)."""
+    for j in range(out.shape[0]):
+        a = qdd_ref[j] + kp[j] * err[j] + kd[j] * (qd_ref[j] - qvel[j])
+        out[j] = a if a != a else min(max(a, -max_acceleration), max_acceleration)
+
+
+@njit(cache=True, nogil=True)
+def capture_shift(com, com_vel, stance_ankle, ref_com, ref_com_vel, ref_stance_ankle,
+                  time_constant_s, gain, max_shift_m):
+    """The swing foot's horizontal shift, m (2,): ``gain`` times the difference between
+    the character's and the reference's capture offsets (centre of mass minus stance
+    ankle, plus its velocity times ``time_constant_s``), no longer than ``max_shift_m``.
+    See :mod:`controller.placement`. Arrays (3,) (only x and y are read)."""
+    shift = np.empty(2)
+    for j in range(2):
+        sim = (com[j] - stance_ankle[j]) + time_constant_s * com_vel[j]
+        ref = (ref_com[j] - ref_stance_ankle[j]) + time_constant_s * ref_com_vel[j]
+        shift[j] = gain * (sim - ref)
+    norm = np.sqrt(np.dot(shift, shift))
+    if norm > max_shift_m:
+        for j in range(2):
+            shift[j] *= max_shift_m / norm
+    return shift
+
+
+@njit(cache=True, nogil=True)
+def move_point(jacp, dofs, move, damping, max_turn, q, qadr):
+    """Turn joints to move a point: ``q[qadr] +=`` :func:`damped_least_squares` of the
+    columns ``dofs`` (n,) of its Jacobian ``jacp`` (3, nv), rows as many as ``move`` (k,),
+    in place."""
+    jac = np.empty((move.shape[0], dofs.shape[0]))
+    for r in range(move.shape[0]):
+        for c in range(dofs.shape[0]):
+            jac[r, c] = jacp[r, dofs[c]]
+    turn = damped_least_squares(jac, move, damping, max_turn)
+    for c in range(qadr.shape[0]):
+        q[qadr[c]] += turn[c]

@@ -21,7 +21,8 @@ import math
 
 import numpy as np
 
-from controller.kernels import damped_least_squares
+from controller.contacts import floor_contacts
+from controller.kernels import capture_shift, move_point
 
 #: Share of the capture-offset difference the swing foot is moved by.
 PLACEMENT_GAIN = 0.3
@@ -36,7 +37,8 @@ SWING_HEIGHT = True
 #: Extra height of the swing ankle above the reference's while the reference swings it,
 #: metres (the default; the balance controller's modes choose their own).
 SWING_CLEARANCE_M = 0.0
-#: Damping of the swing leg's inverse kinematics, m (see :func:`_damped_least_squares`).
+#: Damping of the swing leg's inverse kinematics, m: a near-singular leg (a straight knee)
+#: is not asked for a huge turn (:func:`controller.kernels.damped_least_squares`).
 IK_DAMPING_M = 0.05
 #: The largest change of one swing-leg joint's target, radians.
 MAX_TURN_RAD = math.radians(45.0)
@@ -108,12 +110,15 @@ class FootPlacement:
         low = height < height.min(axis=0) + FOOT_DOWN_HEIGHT_M
         self.ref_down = (speed < FOOT_DOWN_SPEED_MPS) & low  # (T, 2)
         self._down_frames = [np.flatnonzero(self.ref_down[:, side]) for side in range(2)]
+        # per frame and side, the nearest frame with that foot down (:meth:`_nearest_down`)
+        self.down_frame = np.array([[self._nearest_down(t, side) for side in range(2)]
+                                    for t in range(n)], dtype=int).reshape(n, 2)
         g = float(np.linalg.norm(model.opt.gravity))
         self.time_constant_s = math.sqrt(max(float(np.median(self.ref_com[:, 2])), 0.1) / g)
 
-    def _down_frame(self, frame: int, side: int) -> int:
+    def _nearest_down(self, frame: int, side: int) -> int:
         """The frame nearest ``frame`` at which the reference has foot ``side`` down
-        (``frame`` itself when it is down, or never is)."""
+        (``frame`` itself when it is down, or never is; the earlier on a tie)."""
         down = self._down_frames[side]
         if self.ref_down[frame, side] or not down.size:
             return frame
@@ -129,22 +134,19 @@ class FootPlacement:
                 out |= self.foot_bodies[side]
         return out
 
-    def _touching(self, data) -> np.ndarray:
-        """Whether each foot (left, right) touches the floor, bool (2,)."""
-        out = np.zeros(2, dtype=bool)
-        n = data.ncon
-        if not n:
-            return out
+    def _touching(self, floor_bodies) -> tuple[bool, bool]:
+        """Whether each foot (left, right) touches the floor, given the bodies of the
+        state's floor contacts (:func:`controller.contacts.floor_contacts`)."""
+        out = [False, False]
         side_of_body = self._side_of_body
-        for b0, b1 in self.model.geom_bodyid[np.asarray(data.contact.geom[:n])].tolist():
-            if (b0 == 0) != (b1 == 0):
-                side = side_of_body[b0 + b1]  # the floor is body 0
-                if side >= 0:
-                    out[side] = True
-        return out
+        for b in floor_bodies:
+            side = side_of_body[b]
+            if side >= 0:
+                out[side] = True
+        return out[0], out[1]
 
     def adjust(self, data, frame: int, q_ref, gain: float | None = None,
-               clearance_m: float | None = None) -> np.ndarray:
+               clearance_m: float | None = None, floor_bodies=None) -> np.ndarray:
         """Shift the swing hip's angles in ``q_ref`` (in place) for the current state.
 
         Parameters
@@ -159,6 +161,9 @@ class FootPlacement:
             This step's gain (default the placement's own).
         clearance_m : float, optional
             This step's swing clearance (default :data:`SWING_CLEARANCE_M`).
+        floor_bodies : list of int, optional
+            The bodies of the state's floor contacts, if already found
+            (:func:`controller.contacts.floor_contacts`).
 
         Returns
         -------
@@ -167,58 +172,38 @@ class FootPlacement:
         """
         import mujoco
 
-        touching = self._touching(data)
-        if touching.all() or not touching.any():
+        if floor_bodies is None:
+            floor_bodies = floor_contacts(self.model, data)[1].tolist()
+        left, right = self._touching(floor_bodies)
+        if left == right:
             return np.zeros(2)
-        swing = int(np.flatnonzero(~touching)[0])
+        swing = 0 if right else 1
         stance = 1 - swing
         mujoco.mj_subtreeVel(self.model, data)
-        com = data.subtree_com[1]
-        vel = data.subtree_linvel[1]
-        tc = self.time_constant_s
-        sim_offset = (com[:2] - data.xpos[self.ankle[stance], :2]) + tc * vel[:2]
+        xpos = data.xpos
         # the reference's stance foot where the reference has it down, at the frame
         # nearest this one (a foot the character put down early or lifted late is
         # compared with where the reference lands it or last stood on it)
-        foot = self.ref_ankle[self._down_frame(frame, stance), stance, :2]
-        ref_offset = (self.ref_com[frame, :2] - foot) + tc * self.ref_com_vel[frame, :2]
-        shift = (self.gain if gain is None else gain) * (sim_offset - ref_offset)
-        norm = float(np.linalg.norm(shift))
-        if norm > MAX_SHIFT_M:
-            shift *= MAX_SHIFT_M / norm
+        shift = capture_shift(
+            data.subtree_com[1], data.subtree_linvel[1], xpos[self.ankle[stance]],
+            self.ref_com[frame], self.ref_com_vel[frame],
+            self.ref_ankle[self.down_frame[frame, stance], stance], self.time_constant_s,
+            self.gain if gain is None else gain, MAX_SHIFT_M)
         dofs, qadr = self.hips[swing]
-        mujoco.mj_jac(self.model, data, self._jacp, None, data.xpos[self.ankle[swing]],
+        mujoco.mj_jac(self.model, data, self._jacp, None, xpos[self.ankle[swing]],
                       int(self.ankle[swing]))
         if SWING_HEIGHT:
             # and the ankle at least at the reference's height above the floor (plus a
             # clearance while the reference swings it: a toe that scrapes trips; not
             # lower: a swing foot that lands early lands on its toes, behind the body)
-            lift = self.ref_ankle[frame, swing, 2] - data.xpos[self.ankle[swing], 2]
+            lift = self.ref_ankle[frame, swing, 2] - xpos[self.ankle[swing], 2]
             if not self.ref_down[frame, swing]:
                 lift += SWING_CLEARANCE_M if clearance_m is None else clearance_m
-            lift = max(0.0, lift)
-            q_ref[qadr] += _damped_least_squares(self._jacp[:, dofs], np.append(shift, lift))
+            move = np.array((shift[0], shift[1], max(0.0, lift)))
         else:
-            q_ref[qadr] += _damped_least_squares(self._jacp[:2, dofs], shift)
+            move = shift
+        move_point(self._jacp, dofs, move, IK_DAMPING_M, MAX_TURN_RAD, q_ref, qadr)
         return shift
-
-
-def _damped_least_squares(jac, move_m) -> np.ndarray:
-    """The joint change (rad) that moves a point by ``move_m`` through its Jacobian ``jac``
-    (m/rad), damped by :data:`IK_DAMPING_M` so that a near-singular leg (a straight knee)
-    is not asked for a huge turn, and no larger than :data:`MAX_TURN_RAD` per joint.
-
-    Parameters
-    ----------
-    jac : ndarray, shape (k, n)
-    move_m : ndarray, shape (k,)
-
-    Returns
-    -------
-    ndarray, shape (n,)
-    """
-    return damped_least_squares(np.ascontiguousarray(jac), np.asarray(move_m, dtype=float),
-                                IK_DAMPING_M, MAX_TURN_RAD)
 
 
 def _descends(model, body: int, ancestor: int) -> bool:

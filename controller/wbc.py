@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import quadprog
 
+from controller.contacts import floor_contacts
 from controller.kernels import bound_columns, break_bounds, near_bounds, qp_terms
 
 #: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
@@ -106,25 +107,21 @@ class WholeBodyID:
         self.actuator_of_hinge = np.argsort(self.hinge_row)
         self.tolerance = BOUND_TOLERANCE * self.strength
 
-    def floor_contacts(self, data, exclude=()):
+    def floor_contacts(self, data, exclude=(), floor=None):
         """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``,
-        without the contacts of the bodies in ``exclude``."""
-        n = data.ncon
-        if n == 0:
-            return np.zeros((0, 3)), np.zeros(0, dtype=int)
-        geoms = np.asarray(data.contact.geom[:n])
-        bodies = self.model.geom_bodyid[geoms]
-        floor = (bodies[:, 0] == 0) ^ (bodies[:, 1] == 0)
-        if not floor.any():
-            return np.zeros((0, 3)), np.zeros(0, dtype=int)
-        pts = np.asarray(data.contact.pos[:n])[floor]
-        body = np.where(bodies[floor, 0] == 0, bodies[floor, 1], bodies[floor, 0])
+        without the contacts of the bodies in ``exclude``; ``floor``: the state's
+        :func:`controller.contacts.floor_contacts` if already found."""
+        index, body = floor_contacts(self.model, data) if floor is None else floor
+        if not index.size:
+            return np.zeros((0, 3)), body
+        pts = data.contact.pos[:data.ncon][index]
         if exclude:
-            keep = np.array([b not in exclude for b in body], dtype=bool)
+            keep = np.array([b not in exclude for b in body.tolist()], dtype=bool)
             pts, body = pts[keep], body[keep]
         return pts, body
 
-    def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=()):
+    def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=(),
+              floor=None):
         """Torques for the current state.
 
         Parameters
@@ -137,6 +134,8 @@ class WholeBodyID:
         exclude : set of int
             Bodies whose floor contacts are not planned as support (a swing foot that
             scrapes the floor: the floor still pushes it, the plan does not lean on it).
+        floor : tuple of ndarray, optional
+            The state's :func:`controller.contacts.floor_contacts`, if already found.
 
         Returns
         -------
@@ -155,7 +154,7 @@ class WholeBodyID:
         M = self.M
         mujoco.mj_fullM(model, data, M)
         h = np.subtract(data.qfrc_bias, data.qfrc_passive)
-        pts, bodies = self.floor_contacts(data, exclude)
+        pts, bodies = self.floor_contacts(data, exclude, floor)
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
         for i in range(nc):
@@ -193,5 +192,6 @@ class WholeBodyID:
         lam = x[nj:]
         qdd = G @ x + g0
         tau = tau_hinge[self.hinge_row]
-        normal = float(np.sum(lam.reshape(-1, 4) @ self.edges[:, 2]) * self.weight_n) if nc else 0.0
+        # every edge has the same normal component
+        normal = float(np.sum(lam) * self.edges[0, 2] * self.weight_n) if nc else 0.0
         return tau, qdd, normal

@@ -13,7 +13,9 @@ import quadprog
 
 from controller import to_qpos
 from controller.balance import follow
+from controller.contacts import floor_contacts
 from controller.kernels import damped_least_squares, qp_terms
+from controller.placement import FootPlacement
 from controller.wbc import CONTACT_DAMPING, WholeBodyID
 
 
@@ -24,7 +26,7 @@ def states(model02, walk):
     calls = [0]
     solve = WholeBodyID.solve
 
-    def spy(self, data, qdd_des, contact_damping=None, exclude=()):
+    def spy(self, data, qdd_des, contact_damping=None, exclude=(), floor=None):
         # every 7th step only: an MjData holds a 16 MB arena, and a process holding
         # hundreds of them cannot fork the balance controller's helper in later tests
         if calls[0] % 7 == 0:
@@ -32,7 +34,7 @@ def states(model02, walk):
             mujoco.mj_copyData(copy, self.model, data)
             captured.append((self, copy, np.array(qdd_des), exclude))
         calls[0] += 1
-        return solve(self, data, qdd_des, contact_damping, exclude)
+        return solve(self, data, qdd_des, contact_damping, exclude, floor)
 
     qpos = to_qpos(model02, walk)[:121]
     with pytest.MonkeyPatch.context() as patch:
@@ -89,6 +91,36 @@ def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des):
 def test_states_have_contacts_and_flight_free_steps(states):
     contacts = [len(s.floor_contacts(d, e)[0]) for s, d, _, e in states]
     assert len(states) > 50 and min(contacts) >= 1 and max(contacts) >= 3
+
+
+def test_floor_contact_scan_is_the_floor_pairs(states):
+    """The per-step scan (compiled) finds the contacts whose one geom is the world's, in
+    order, and the feet touching the floor are those of its bodies."""
+    sides_seen = set()
+    for solver, data, _, _ in states:
+        model = solver.model
+        index, body = floor_contacts(model, data)
+        pairs = model.geom_bodyid[data.contact.geom[:data.ncon]].reshape(-1, 2)
+        want = np.flatnonzero((pairs[:, 0] == 0) != (pairs[:, 1] == 0))
+        np.testing.assert_array_equal(index, want)
+        np.testing.assert_array_equal(body, pairs[want].max(axis=1))
+        placement = FootPlacement(model, np.array([data.qpos, data.qpos]), 120.0)
+        touching = placement._touching(body.tolist())
+        for side, name in enumerate(("lfoot", "rfoot")):
+            foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+            on = any(_descends(model, int(b), foot) for b in body)
+            assert touching[side] == on
+        sides_seen.add(touching)
+    # single and double support both occur on the walk
+    assert {(True, True), (True, False), (False, True)} <= sides_seen
+
+
+def _descends(model, body, ancestor):
+    while body > 0:
+        if body == ancestor:
+            return True
+        body = int(model.body_parentid[body])
+    return False
 
 
 def test_compiled_terms_are_the_documented_least_squares(states):
