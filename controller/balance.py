@@ -186,7 +186,8 @@ class BalanceRun:
     weight_n : float
         The body's weight.
     wall_s : float
-        Wall-clock seconds of the stepping loop.
+        Wall-clock seconds of the stepping loop (from after the set-up, which includes
+        loading the compiled kernels once per process).
     sim_s : float
         Simulated seconds.
     raw_step_s : float
@@ -401,6 +402,13 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     budget = SEARCH_BUDGET if search_budget is None else float(search_budget)
     if not (math.isfinite(budget) and budget >= 0):
         raise ValueError(f"the search budget must be a number >= 0, not {search_budget!r}")
+    # The compiled kernels load from numba's cache on their first call (a fraction of a
+    # second, once per process): a step from a scratch copy of the start loads them before
+    # the clock starts and before the helper process is forked (it inherits them).
+    scratch = mujoco.MjData(sim)
+    mujoco.mj_copyData(scratch, sim, data)
+    control.step(scratch, 0, MODES[0])
+    del scratch
     search = _Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
                      (pelvis_body, head_site), budget)
     if processes not in (1, 2):
