@@ -303,3 +303,199 @@ def move_point(jacp, dofs, move, damping, max_turn, q, qadr):
     turn = damped_least_squares(jac, move, damping, max_turn)
     for c in range(qadr.shape[0]):
         q[qadr[c]] += turn[c]
+
+
+@njit(cache=True, nogil=True)
+def _cholesky_solve(L, b):
+    """``x`` with ``L L^T x = b``; ``L`` (n, n) lower triangular, ``b`` (n,)."""
+    n = L.shape[0]
+    y = np.empty(n)
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= L[i, k] * y[k]
+        y[i] = s / L[i, i]
+    x = np.empty(n)
+    for i in range(n - 1, -1, -1):
+        s = y[i]
+        for k in range(i + 1, n):
+            s -= L[k, i] * x[k]
+        x[i] = s / L[i, i]
+    return x
+
+
+@njit(cache=True, nogil=True)
+def _solve_equalities(P, q, T, t0, low, high, nl, fixed, upper, lower):
+    """The QP of :func:`qp_terms` with the edge magnitudes ``fixed`` (nl,) at 0 and the
+    hinges ``upper`` / ``lower`` (nh,) at their upper / lower torque bound, as equalities:
+    ``(x (n,), the bound rows' multipliers (nh,), 0 elsewhere, the Lagrangian's gradient
+    (n,))``. The fixed magnitudes are eliminated, the torque rows solved by their
+    multipliers through the Cholesky factor of the rest of ``P``."""
+    n = P.shape[0]
+    nj = n - nl
+    free = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        if i < nj or not fixed[i - nj]:
+            free[m] = i
+            m += 1
+    PF = np.empty((m, m))
+    qF = np.empty(m)
+    for a in range(m):
+        qF[a] = q[free[a]]
+        for b in range(m):
+            PF[a, b] = P[free[a], free[b]]
+    rows = np.empty(nj, dtype=np.int64)
+    sign = np.empty(nj)
+    r = 0
+    for k in range(nj):
+        if upper[k] or lower[k]:
+            rows[r] = k
+            sign[r] = -1.0 if upper[k] else 1.0  # the constraint: sign * tau >= sign * bound
+            r += 1
+    L = np.linalg.cholesky(PF)
+    xF = _cholesky_solve(L, qF)
+    mu = np.zeros(r)
+    if r:
+        # P x = q + E mu and E^T x = e on the bound rows
+        E = np.empty((m, r))
+        e = np.empty(r)
+        for j in range(r):
+            k = rows[j]
+            for a in range(m):
+                E[a, j] = sign[j] * T[k, free[a]]
+            e[j] = t0[k] - high[k] if sign[j] < 0 else low[k] - t0[k]
+        Z = np.empty((m, r))
+        for j in range(r):
+            Z[:, j] = _cholesky_solve(L, np.ascontiguousarray(E[:, j]))
+        mu = np.linalg.solve(E.T @ Z, e - E.T @ xF)
+        xF = xF + Z @ mu
+    x = np.zeros(n)
+    for a in range(m):
+        x[free[a]] = xF[a]
+    gradient = P @ x - q
+    multiplier = np.zeros(nj)
+    for j in range(r):
+        multiplier[rows[j]] = mu[j]
+        for i in range(n):
+            gradient[i] -= mu[j] * sign[j] * T[rows[j], i]
+    return x, multiplier, gradient
+
+
+@njit(cache=True, nogil=True)
+def solve_active_set(P, q, T, t0, low, high, nl, fixed, upper, lower, tol_tau, tol_force,
+                     tol_multiplier, max_rounds):
+    """The QP of :func:`qp_terms` from a guessed active set, and whether it was found.
+
+    The guess: the edge magnitudes ``fixed`` (nl,) are 0, and the hinges ``upper`` /
+    ``lower`` (nh,) are at their upper / lower torque bound. Each round solves the problem
+    with the guess as equalities and checks the full problem's KKT conditions: every other
+    magnitude >= -``tol_force``, every torque within its range +-``tol_tau`` (nh,), every
+    multiplier >= -``tol_multiplier`` times ``1 + max |q|``. Where they hold, the solution
+    is the QP's minimiser with every bound; else the guess is mended (a magnitude below 0 or
+    a torque out of range joins it, a constraint with a negative multiplier leaves it) and
+    another round made, at most ``max_rounds`` in all. ``fixed``, ``upper``, ``lower`` end
+    as the last guess (in place).
+
+    Parameters
+    ----------
+    P : ndarray, shape (n, n)
+    q : ndarray, shape (n,)
+    T : ndarray, shape (nh, n)
+    t0, low, high : ndarray, shape (nh,)
+    nl : int
+        The edge magnitudes are the last ``nl`` unknowns.
+
+    Returns
+    -------
+    x : ndarray, shape (n,)
+    ok : bool
+    """
+    n = P.shape[0]
+    nj = n - nl
+    tol_multiplier = tol_multiplier * (1.0 + np.max(np.abs(q)))
+    x = np.zeros(n)
+    for _ in range(max_rounds):
+        x, multiplier, gradient = _solve_equalities(P, q, T, t0, low, high, nl, fixed,
+                                                    upper, lower)
+        ok = True
+        for i in range(nl):
+            if fixed[i]:
+                if gradient[nj + i] < -tol_multiplier:
+                    fixed[i] = False
+                    ok = False
+            elif x[nj + i] < -tol_force:
+                fixed[i] = True
+                ok = False
+        tau = T @ x + t0
+        for k in range(nj):
+            if (upper[k] or lower[k]) and multiplier[k] < -tol_multiplier:
+                upper[k] = lower[k] = False
+                ok = False
+            elif tau[k] > high[k] + tol_tau[k]:
+                upper[k] = True
+                ok = False
+            elif tau[k] < low[k] - tol_tau[k]:
+                lower[k] = True
+                ok = False
+        if ok:
+            return x, True
+    return x, False
+
+
+@njit(cache=True, nogil=True)
+def recall_active(memory, geoms):
+    """The edge magnitudes that were 0 at the last solve, if its planned contacts were
+    the same geom pairs in the same order: ``(fixed (4 m,) bool, known)``.
+
+    ``memory`` (k,): written by :func:`remember_active` (``[m, geom pairs (2 m),
+    per-contact masks of the 4 edges (m)]``, ``m = -1``: nothing); ``geoms`` (m, 2)."""
+    m = geoms.shape[0]
+    fixed = np.zeros(4 * m, dtype=np.bool_)
+    if memory.shape[0] == 0 or memory[0] != m:
+        return fixed, False
+    for i in range(m):
+        if memory[1 + 2 * i] != geoms[i, 0] or memory[2 + 2 * i] != geoms[i, 1]:
+            return fixed, False
+    for i in range(m):
+        mask = int(memory[1 + 2 * m + i])
+        for e in range(4):
+            fixed[4 * i + e] = (mask >> e) & 1 == 1
+    return fixed, True
+
+
+@njit(cache=True, nogil=True)
+def remember_active(memory, geoms, fixed):
+    """Write the planned contacts ``geoms`` (m, 2) and which of their edge magnitudes are
+    0, ``fixed`` (4 m,), into ``memory`` (k,) for :func:`recall_active` (or that nothing
+    is known, where it does not fit)."""
+    m = geoms.shape[0]
+    if memory.shape[0] == 0:
+        return
+    if 1 + 3 * m > memory.shape[0]:
+        memory[0] = -1.0
+        return
+    memory[0] = m
+    for i in range(m):
+        memory[1 + 2 * i] = geoms[i, 0]
+        memory[2 + 2 * i] = geoms[i, 1]
+        mask = 0
+        for e in range(4):
+            if fixed[4 * i + e]:
+                mask |= 1 << e
+        memory[1 + 2 * m + i] = mask
+
+
+@njit(cache=True, nogil=True)
+def hinges_at_bounds(ctrl, actuator_of_hinge, low, high, tolerance):
+    """Which hinges' applied torque is within ``tolerance`` (nh,) N m of the upper and of
+    the lower bound: ``(upper, lower)``, bool (nh,) each. ``ctrl`` (nu,) in actuator
+    order, the rest (nh,) in hinge order."""
+    nh = low.shape[0]
+    upper = np.empty(nh, dtype=np.bool_)
+    lower = np.empty(nh, dtype=np.bool_)
+    for k in range(nh):
+        c = ctrl[actuator_of_hinge[k]]
+        upper[k] = c >= high[k] - tolerance[k]
+        lower[k] = c <= low[k] + tolerance[k]
+    return upper, lower

@@ -20,11 +20,22 @@ subject, exactly, to
   weight far from the ankle, so the plan must not count on it.
 
 The root rows are solved for the root acceleration, which leaves a quadratic programme in
-the joint accelerations and the edge magnitudes (about 45 + 4 x contacts unknowns), solved
-by ``quadprog`` (Goldfarb-Idnani, dense). Its terms are set up in one compiled call
-(:func:`controller.kernels.qp_terms`); the torque bounds of the hinges whose applied torque
-is near a bound go into the first solve, any other bound its solution breaks into the next
-(the minimiser is that of the QP with every bound; usually one solve of about half the size).
+the joint accelerations and the edge magnitudes (about 45 + 4 x contacts unknowns). Its
+terms are set up in one compiled call (:func:`controller.kernels.qp_terms`).
+
+From one physics step to the next the QP's active set (which edge magnitudes are 0, which
+torques are at a bound) rarely changes. So it is first solved with the last step's active
+set as equalities (:func:`controller.kernels.solve_active_set`: the edges remembered with
+the planned contacts' geoms in the MuJoCo state's ``userdata``, so that a rollout from a
+saved state solves exactly as the run did; the torques at a bound read from the applied
+torques), and the full problem's KKT conditions checked, the guess mended up to
+:data:`WARM_ROUNDS` times. Where it fails, or the contacts changed, ``quadprog``
+(Goldfarb-Idnani, dense) solves it from scratch, with the torque bounds of the hinges whose
+applied torque is near a bound in the first solve and any other bound its solution breaks in
+the next (the minimiser is that of the QP with every bound either way: the problem is
+convex). The tolerances are tight enough that both give the same torques to about 1e-5 N m
+(the QP is nearly flat in how the weight is shared among the contact edges, so a looser
+multiplier test accepts points whose torques differ by newton-metres).
 """
 
 from __future__ import annotations
@@ -35,7 +46,16 @@ import numpy as np
 import quadprog
 
 from controller.contacts import floor_contacts
-from controller.kernels import bound_columns, break_bounds, near_bounds, qp_terms
+from controller.kernels import (
+    bound_columns,
+    break_bounds,
+    hinges_at_bounds,
+    near_bounds,
+    qp_terms,
+    recall_active,
+    remember_active,
+    solve_active_set,
+)
 
 #: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
 CONTACT_DAMPING = 20.0
@@ -46,6 +66,16 @@ FRICTION = 0.8
 NEAR_BOUND = 0.2
 #: A solution breaks a bound when it passes it by more than this share of the strength.
 BOUND_TOLERANCE = 1e-9
+#: An applied torque within this share of the strength of a bound is guessed to be at it.
+AT_BOUND = 1e-6
+#: A guessed active set is wrong where an edge magnitude (body weights) is below minus
+#: this ...
+FORCE_TOLERANCE = 1e-12
+#: ... or a multiplier below minus this times 1 + the largest linear term of the QP.
+MULTIPLIER_TOLERANCE = 1e-14
+#: Rounds of mending a guessed active set before the QP is solved from scratch.
+WARM_ROUNDS = 3
+_NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
 
 
 @dataclass(frozen=True)
@@ -106,19 +136,21 @@ class WholeBodyID:
         self.torque_scale = self.w.torque / self.strength
         self.actuator_of_hinge = np.argsort(self.hinge_row)
         self.tolerance = BOUND_TOLERANCE * self.strength
+        self.at_bound = AT_BOUND * self.strength
 
     def floor_contacts(self, data, exclude=(), floor=None):
-        """Floor contact points and their bodies: ``(points (n, 3), bodies (n,))``,
-        without the contacts of the bodies in ``exclude``; ``floor``: the state's
-        :func:`controller.contacts.floor_contacts` if already found."""
+        """The planned floor contacts: ``(points (m, 3), bodies (m,), index (m,))``, index
+        into ``data.contact``, without the contacts of the bodies in ``exclude``;
+        ``floor``: the state's :func:`controller.contacts.floor_contacts` if already
+        found."""
         index, body = floor_contacts(self.model, data) if floor is None else floor
         if not index.size:
-            return np.zeros((0, 3)), body
+            return np.zeros((0, 3)), body, index
         pts = data.contact.pos[:data.ncon][index]
         if exclude:
             keep = np.array([b not in exclude for b in body.tolist()], dtype=bool)
-            pts, body = pts[keep], body[keep]
-        return pts, body
+            pts, body, index = pts[keep], body[keep], index[keep]
+        return pts, body, index
 
     def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=(),
               floor=None):
@@ -154,7 +186,7 @@ class WholeBodyID:
         M = self.M
         mujoco.mj_fullM(model, data, M)
         h = np.subtract(data.qfrc_bias, data.qfrc_passive)
-        pts, bodies = self.floor_contacts(data, exclude, floor)
+        pts, bodies, index = self.floor_contacts(data, exclude, floor)
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
         for i in range(nc):
@@ -169,29 +201,61 @@ class WholeBodyID:
             self.weight_n, root_w, w.joints, w.contact, w.force, self.torque_scale,
             float(contact_damping), self.low, self.high)
         nl = P.shape[0] - nj
-        # Most torque bounds are far from binding; the QP is solved with those of the
-        # hinges whose applied torque (in the state) is near its bound, and solved again
-        # with any bound its solution breaks, until it breaks none: the same minimiser
-        # as with every bound (the problem is convex), at about half the solver's cost.
-        watched = near_bounds(data.ctrl, self.actuator_of_hinge, self.low, self.high,
-                              self.strength, NEAR_BOUND)
-        while True:
-            Cs, ds = bound_columns(C, d, nl, watched)
-            try:
-                x = (quadprog.solve_qp(P, q, Cs, ds, 0)[0] if ds.size
-                     else np.linalg.solve(P, q))
-            except (ValueError, np.linalg.LinAlgError):
-                # numerically infeasible: least squares, forces clipped at 0
-                x = np.linalg.lstsq(P, q, rcond=None)[0]
-                x[nj:] = np.maximum(x[nj:], 0.0)
-                tau_hinge = T @ x + t0
-                break
+        # Warm start: the edges whose force was 0 at the last step (carried in the MuJoCo
+        # state's userdata, so a rollout from a saved state solves as the run did) and the
+        # hinges whose applied torque is at a bound are guessed to be the active set; the
+        # guess is right when the KKT conditions hold (the QP's minimiser, at a fifth of
+        # the cost), else the QP is solved from scratch.
+        geoms = data.contact.geom[:data.ncon][index] if nl else _NO_GEOMS
+        memory = data.userdata
+        x = None
+        if nl:
+            fixed, known = recall_active(memory, geoms)
+            if known:
+                upper, lower = hinges_at_bounds(data.ctrl, self.actuator_of_hinge, self.low,
+                                                self.high, self.at_bound)
+                x, ok = solve_active_set(P, q, T, t0, self.low, self.high, nl, fixed, upper,
+                                         lower, self.tolerance, FORCE_TOLERANCE,
+                                         MULTIPLIER_TOLERANCE, WARM_ROUNDS)
+                x = x if ok else None
+        if x is not None:
             tau_hinge = T @ x + t0
-            if not break_bounds(tau_hinge, self.low, self.high, self.tolerance, watched):
-                break
+        else:
+            x, tau_hinge, fixed = self._solve_cold(data, P, q, C, d, T, t0, nl)
+        remember_active(memory, geoms, fixed)
         lam = x[nj:]
         qdd = G @ x + g0
         tau = tau_hinge[self.hinge_row]
         # every edge has the same normal component
         normal = float(np.sum(lam) * self.edges[0, 2] * self.weight_n) if nc else 0.0
         return tau, qdd, normal
+
+    def _solve_cold(self, data, P, q, C, d, T, t0, nl):
+        """The QP from scratch: ``(x, hinge torques, which edge magnitudes are 0 (nl,))``.
+
+        Most torque bounds are far from binding; the QP is solved with those of the hinges
+        whose applied torque (in the state) is near its bound, and solved again with any
+        bound its solution breaks, until it breaks none: the same minimiser as with every
+        bound (the problem is convex), at about half the solver's cost.
+        """
+        nj = self.nv - 6
+        watched = near_bounds(data.ctrl, self.actuator_of_hinge, self.low, self.high,
+                              self.strength, NEAR_BOUND)
+        while True:
+            Cs, ds = bound_columns(C, d, nl, watched)
+            try:
+                if ds.size:
+                    x, _, _, _, _, active = quadprog.solve_qp(P, q, Cs, ds, 0)
+                else:
+                    x, active = np.linalg.solve(P, q), np.zeros(0, dtype=int)
+            except (ValueError, np.linalg.LinAlgError):
+                # numerically infeasible: least squares, forces clipped at 0
+                x = np.linalg.lstsq(P, q, rcond=None)[0]
+                x[nj:] = np.maximum(x[nj:], 0.0)
+                return x, T @ x + t0, x[nj:] <= 0.0
+            tau_hinge = T @ x + t0
+            if not break_bounds(tau_hinge, self.low, self.high, self.tolerance, watched):
+                fixed = np.zeros(nl, dtype=bool)
+                active = active[(active >= 1) & (active <= nl)] - 1  # 1-based columns
+                fixed[active] = True
+                return x, tau_hinge, fixed

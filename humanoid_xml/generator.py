@@ -63,10 +63,14 @@ from upm.errors import DataFileError
 from upm.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
-GENERATOR_VERSION = "3"
+GENERATOR_VERSION = "4"
 #: Joint limits: MuJoCo's constraint reference (time constant s, damping ratio) and
 #: impedance (d0, d_width, width rad, midpoint, power), see the module docstring.
 LIMIT_SOLREF = (0.005, 1.0)
+#: Numbers of user data carried with the MuJoCo state (``mjData.userdata``): controllers'
+#: memory from one step to the next that must travel with a saved state (the balance
+#: controller's QP warm start, :mod:`controller.wbc`). It takes no part in the physics.
+USERDATA_SIZE = 100
 LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: Simulation time step, seconds.
 TIMESTEP_S = 0.002
@@ -155,6 +159,7 @@ def _document(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float,
         f"       {summary} -->",
         '  <compiler angle="degree" autolimits="true"/>',
         f'  <option timestep="{_num(TIMESTEP_S)}" integrator="implicitfast"/>',
+        f'  <size nuserdata="{USERDATA_SIZE}"/>',
         "  <custom>",
         "    <!-- the stature the masses and strengths were scaled by (legs straightened) -->",
         f'    <numeric name="stature_m" data="{_num(stature)}"/>',

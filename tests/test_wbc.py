@@ -14,9 +14,21 @@ import quadprog
 from controller import to_qpos
 from controller.balance import follow
 from controller.contacts import floor_contacts
-from controller.kernels import damped_least_squares, qp_terms
+from controller.kernels import (
+    damped_least_squares,
+    qp_terms,
+    recall_active,
+    remember_active,
+    solve_active_set,
+)
 from controller.placement import FootPlacement
-from controller.wbc import CONTACT_DAMPING, WholeBodyID
+from controller.wbc import (
+    CONTACT_DAMPING,
+    FORCE_TOLERANCE,
+    MULTIPLIER_TOLERANCE,
+    WARM_ROUNDS,
+    WholeBodyID,
+)
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +61,7 @@ def _terms(solver, data, exclude):
     M = np.zeros((nv, nv))
     mujoco.mj_fullM(model, data, M)
     h = data.qfrc_bias - data.qfrc_passive
-    pts, bodies = solver.floor_contacts(data, exclude)
+    pts, bodies, _ = solver.floor_contacts(data, exclude)
     jacp = np.zeros((3, nv))
     Jc = np.zeros((3 * len(pts), nv))
     for i, (p, b) in enumerate(zip(pts, bodies, strict=True)):
@@ -167,6 +179,84 @@ def test_solve_finds_the_minimiser_with_every_bound(states):
         assert normal >= 0.0
     # the walk leans on its torque bounds: the case the trimmed solve must get right
     assert bound_hit > 0
+
+
+def _cold_minimiser(solver, data, qdd_des, exclude):
+    """The hinge torques (actuator order) and P, q, T, t0 of a state, solved from scratch."""
+    copy = mujoco.MjData(solver.model)
+    mujoco.mj_copyData(copy, solver.model, data)
+    copy.userdata[:] = -1.0  # nothing remembered
+    tau = solver.solve(copy, qdd_des, exclude=exclude)[0]
+    return tau
+
+
+def test_warm_start_is_taken_and_finds_the_cold_minimiser(states):
+    """The active set remembered from the step before (in the state's userdata) usually
+    solves the QP; its torques are the cold solve's to well below a milli-newton-metre."""
+    cold_calls = [0]
+    cold = WholeBodyID._solve_cold
+
+    def counting(self, *args):
+        cold_calls[0] += 1
+        return cold(self, *args)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(WholeBodyID, "_solve_cold", counting)
+        planned = warm_solves = 0
+        for solver, data, qdd_des, exclude in states:
+            copy = mujoco.MjData(solver.model)
+            mujoco.mj_copyData(copy, solver.model, data)
+            before = cold_calls[0]
+            tau = solver.solve(copy, qdd_des, exclude=exclude)[0]
+            warm = cold_calls[0] == before
+            planned += int(len(solver.floor_contacts(data, exclude)[0]) > 0)
+            warm_solves += int(warm)
+            want = _cold_minimiser(solver, data, qdd_des, exclude)
+            np.testing.assert_allclose(tau, want, atol=1e-4, err_msg=f"warm {warm}")
+    assert warm_solves > 0.8 * planned, (warm_solves, planned)
+
+
+def test_a_wrong_active_set_is_mended_or_refused(states):
+    """From a wrong guess (every edge force 0, no torque at a bound) the solve either
+    mends it to the minimiser or says it did not find it: never a wrong answer."""
+    mended = 0
+    for solver, data, qdd_des, exclude in states[::3]:
+        M, h, Jc = _terms(solver, data, exclude)
+        if not Jc.shape[0]:
+            continue
+        w = solver.w
+        P, q, C, d, G, g0, T, t0 = qp_terms(
+            M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n,
+            solver.root_w, w.joints, w.contact, w.force, solver.torque_scale,
+            CONTACT_DAMPING, solver.low, solver.high)
+        nl, nh = P.shape[0] - (solver.nv - 6), solver.nv - 6
+        want = _cold_minimiser(solver, data, qdd_des, exclude)[solver.actuator_of_hinge]
+        for rounds in (1, WARM_ROUNDS):
+            fixed = np.ones(nl, dtype=bool)
+            upper, lower = np.zeros(nh, dtype=bool), np.zeros(nh, dtype=bool)
+            x, ok = solve_active_set(P, q, T, t0, solver.low, solver.high, nl, fixed,
+                                     upper, lower, solver.tolerance, FORCE_TOLERANCE,
+                                     MULTIPLIER_TOLERANCE, rounds)
+            if rounds == 1:
+                assert not ok  # the body stands on its feet: some edge pushes
+            elif ok:
+                mended += 1
+                np.testing.assert_allclose(T @ x + t0, want, atol=1e-4)
+    assert mended > 0
+
+
+def test_active_set_memory_round_trip():
+    memory = np.zeros(16)
+    geoms = np.array([[0, 5], [0, 7], [0, 7]], dtype=np.int32)
+    fixed = np.array([1, 0, 0, 1, 0, 0, 0, 0, 1, 1, 1, 1], dtype=bool)
+    remember_active(memory, geoms, fixed)
+    got, known = recall_active(memory, geoms)
+    assert known and np.array_equal(got, fixed)
+    assert not recall_active(memory, geoms[[1, 0, 2]])[1]  # another contact order
+    assert not recall_active(memory, geoms[:2])[1]
+    remember_active(memory, np.zeros((6, 2), dtype=np.int32), np.zeros(24, dtype=bool))
+    assert memory[0] == -1 and not recall_active(memory, np.zeros((6, 2), np.int32))[1]
+    assert not recall_active(np.zeros(0), geoms)[1]  # a model without user data
 
 
 def test_damped_least_squares_is_its_formula():
