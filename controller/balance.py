@@ -451,8 +451,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 recorded = ahead.frame(t)
             if recorded is not None:
                 # a rollout ahead simulated this frame already, from the same state
-                state, ctrl[(t - 1) * substeps:t * substeps], tau = recorded
-                restore_frame(sim, data, state, ctrl[t * substeps - 1])
+                state, ctrl[(t - 1) * substeps:t * substeps], tau, userdata = recorded
+                restore_frame(sim, data, state, ctrl[t * substeps - 1], userdata)
                 steps += substeps
                 reused += substeps - 1  # the frame's last step is taken again
             else:
@@ -691,7 +691,7 @@ class _GainSelector:
     def recorded(self, t: int, gain: float):
         """Frame ``t`` as the last choice's rollout simulated it, if the run is still on
         that rollout (every frame since the choice taken from it, with its gain in the
-        default mode): ``(state (nstate,), ctrl (substeps, nu), tau (nu,))`` for
+        default mode): :meth:`controller.lookahead.Recording.frame`'s tuple, for
         :func:`controller.lookahead.restore_frame`, else None."""
         if self.chain != t - 1:
             self.chain = None

@@ -418,6 +418,8 @@ def solve_active_set(P, q, T, t0, low, high, nl, fixed, upper, lower, tol_tau, t
     for _ in range(max_rounds):
         x, multiplier, gradient = _solve_equalities(P, q, T, t0, low, high, nl, fixed,
                                                     upper, lower)
+        if not np.all(np.isfinite(x)):
+            return x, False
         ok = True
         for i in range(nl):
             if fixed[i]:
@@ -489,13 +491,13 @@ def remember_active(memory, geoms, fixed):
 @njit(cache=True, nogil=True)
 def hinges_at_bounds(ctrl, actuator_of_hinge, low, high, tolerance):
     """Which hinges' applied torque is within ``tolerance`` (nh,) N m of the upper and of
-    the lower bound: ``(upper, lower)``, bool (nh,) each. ``ctrl`` (nu,) in actuator
-    order, the rest (nh,) in hinge order."""
+    the lower bound (a finite one): ``(upper, lower)``, bool (nh,) each. ``ctrl`` (nu,) in
+    actuator order, the rest (nh,) in hinge order."""
     nh = low.shape[0]
     upper = np.empty(nh, dtype=np.bool_)
     lower = np.empty(nh, dtype=np.bool_)
     for k in range(nh):
         c = ctrl[actuator_of_hinge[k]]
-        upper[k] = c >= high[k] - tolerance[k]
-        lower[k] = c <= low[k] + tolerance[k]
+        upper[k] = high[k] < np.inf and c >= high[k] - tolerance[k]
+        lower[k] = low[k] > -np.inf and c <= low[k] + tolerance[k]
     return upper, lower

@@ -60,6 +60,10 @@ class Recording:
         The torques applied at each step of each frame, N m.
     tau : ndarray, shape (capacity, nu)
         The planned torques of each frame's last step, N m.
+    userdata : ndarray, shape (capacity, nuserdata)
+        ``mjData.userdata`` after each frame: what the controller's last step wrote
+        there (the QP's warm start, :mod:`controller.wbc`), which taking that step again
+        without the controller does not write.
     cost_terms : ndarray, shape (capacity, 2)
         Each frame's two additions to the rollout's cost (:func:`rollout_cost`), so that
         a rollout continued from a later frame sums them again in the same order.
@@ -72,6 +76,7 @@ class Recording:
         self.states = np.zeros((capacity, size))
         self.ctrl = np.zeros((capacity, substeps, sim.nu))
         self.tau = np.zeros((capacity, sim.nu))
+        self.userdata = np.zeros((capacity, sim.nuserdata))
         self.cost_terms = np.zeros((capacity, 2))
         self.start_frame, self.gain, self.frames = -1, math.nan, 0
 
@@ -83,12 +88,12 @@ class Recording:
         self.start_frame, self.gain, self.frames = start_frame, gain, 0
 
     def frame(self, t: int, gain: float):
-        """``(state (nstate,), ctrl (substeps, nu), tau (nu,))`` of frame ``t`` if
-        recorded with ``gain``, else None."""
+        """``(state (nstate,), ctrl (substeps, nu), tau (nu,), userdata (nuserdata,))``
+        of frame ``t`` if recorded with ``gain``, else None."""
         i = t - self.start_frame - 1
         if gain != self.gain or not 0 <= i < self.frames:
             return None
-        return self.states[i], self.ctrl[i], self.tau[i]
+        return self.states[i], self.ctrl[i], self.tau[i], self.userdata[i]
 
     def clear(self) -> None:
         self.frames = 0
@@ -97,7 +102,7 @@ class Recording:
         """Drop the first ``frames`` frames: the recording then starts after frame
         ``start_frame + frames`` (the run has taken those)."""
         n = self.frames - frames
-        for array in (self.states, self.ctrl, self.tau, self.cost_terms):
+        for array in (self.states, self.ctrl, self.tau, self.userdata, self.cost_terms):
             array[:n] = array[frames:self.frames]
         self.start_frame += frames
         self.frames = n
@@ -105,18 +110,20 @@ class Recording:
     def packed(self) -> tuple:
         """What crosses the pipe: the recorded frames only."""
         n = self.frames
-        return self.start_frame, self.gain, self.states[:n], self.ctrl[:n], self.tau[:n]
+        return (self.start_frame, self.gain, self.states[:n], self.ctrl[:n], self.tau[:n],
+                self.userdata[:n])
 
     def unpack(self, packed: tuple) -> None:
         """Take a recording made elsewhere (:meth:`packed`)."""
-        self.start_frame, self.gain, states, ctrl, tau = packed
+        self.start_frame, self.gain, states, ctrl, tau, userdata = packed
         self.frames = n = states.shape[0]
         self.states[:n], self.ctrl[:n], self.tau[:n] = states, ctrl, tau
+        self.userdata[:n] = userdata
 
 
-def restore_frame(sim, data, state, last_ctrl) -> None:
+def restore_frame(sim, data, state, last_ctrl, userdata) -> None:
     """Put ``data`` where a recorded frame left it: its state before the last step, then
-    that step again with the torques then applied.
+    that step again with the torques then applied, and the user data the controller left.
 
     Parameters
     ----------
@@ -124,6 +131,8 @@ def restore_frame(sim, data, state, last_ctrl) -> None:
         :attr:`Recording.states` row.
     last_ctrl : ndarray, shape (nu,)
         The torques of the frame's last step, N m.
+    userdata : ndarray, shape (nuserdata,)
+        :attr:`Recording.userdata` row.
     """
     import mujoco
 
@@ -131,6 +140,7 @@ def restore_frame(sim, data, state, last_ctrl) -> None:
     mujoco.mj_step1(sim, data)
     data.ctrl[:] = last_ctrl
     mujoco.mj_step2(sim, data)
+    data.userdata[:] = userdata
 
 
 def _warnings(data) -> int:
@@ -187,7 +197,7 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
             if VELOCITY_WEIGHT_S:
                 cost += recording.cost_terms[i, 1]
         restore_frame(sim, scratch, recording.states[done - 1],
-                      recording.ctrl[done - 1, last_step])
+                      recording.ctrl[done - 1, last_step], recording.userdata[done - 1])
         first, steps = frame + done + 1, 1
         warned = _warnings(scratch)
     elif recording_on:
@@ -207,6 +217,7 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
                 recording_on = False  # the counters differ from the run's from here on
             else:
                 recording.tau[i] = tau
+                recording.userdata[i] = scratch.userdata
                 recording.frames = i + 1
         steps += control.substeps
         if not np.all(np.isfinite(scratch.qpos)):

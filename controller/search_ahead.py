@@ -79,7 +79,7 @@ class SearchAhead:
 
     def frame(self, t: int):
         """Frame ``t`` from the recording, if the run has taken every frame since its
-        restart from it: ``(state, ctrl (substeps, nu), tau (nu,))`` for
+        restart from it: :meth:`controller.lookahead.Recording.frame`'s tuple, for
         :func:`controller.lookahead.restore_frame`, else None."""
         if self.chain is None or self.chain != t - 1:
             self.chain = None

@@ -37,6 +37,23 @@ def test_two_processes_give_the_same_run(model02, short_walk):
     assert not multiprocessing.active_children()
 
 
+def test_a_whole_walk_is_the_same_however_its_frames_are_computed(model02, walk,
+                                                                   monkeypatch):
+    """02_01 start to end: on one process, on two, and with every frame simulated by the
+    run itself, the same run bit for bit. A restored frame must leave the whole state as
+    the controller did, its QP's warm start in the user data included (a short walk does
+    not show a stale one: the warm start usually reaches the same active set anyway)."""
+    qpos = to_qpos(model02, walk)
+    one = follow(model02, qpos, walk.fps)
+    two = follow(model02, qpos, walk.fps, processes=2)
+    monkeypatch.setattr(balance._GainSelector, "recorded", lambda self, t, gain: None)
+    simulated = follow(model02, qpos, walk.fps)
+    assert not one.fell and one.reused_steps > 0
+    for run in (two, simulated):
+        np.testing.assert_array_equal(run.ctrl, one.ctrl)
+        np.testing.assert_array_equal(run.qpos, one.qpos)
+
+
 @pytest.mark.parametrize("processes", [1, 2])
 def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short_walk,
                                                                    monkeypatch, processes):
