@@ -384,18 +384,15 @@ def _solve_equalities(P, q, T, t0, low, high, nl, fixed, upper, lower):
 
 @njit(cache=True, nogil=True)
 def solve_active_set(P, q, T, t0, low, high, nl, fixed, upper, lower, tol_tau, tol_force,
-                     tol_multiplier, max_rounds):
-    """The QP of :func:`qp_terms` from a guessed active set, and whether it was found.
+                     tol_multiplier):
+    """The QP of :func:`qp_terms` solved with a guessed active set, and whether the guess
+    was right (the solution then is the QP's minimiser with every bound).
 
     The guess: the edge magnitudes ``fixed`` (nl,) are 0, and the hinges ``upper`` /
-    ``lower`` (nh,) are at their upper / lower torque bound. Each round solves the problem
-    with the guess as equalities and checks the full problem's KKT conditions: every other
+    ``lower`` (nh,) are at their upper / lower torque bound. The problem is solved with the
+    guess as equalities and the full problem's KKT conditions checked: every other
     magnitude >= -``tol_force``, every torque within its range +-``tol_tau`` (nh,), every
-    multiplier >= -``tol_multiplier`` times ``1 + max |q|``. Where they hold, the solution
-    is the QP's minimiser with every bound; else the guess is mended (a magnitude below 0 or
-    a torque out of range joins it, a constraint with a negative multiplier leaves it) and
-    another round made, at most ``max_rounds`` in all. ``fixed``, ``upper``, ``lower`` end
-    as the last guess (in place).
+    multiplier >= -``tol_multiplier`` times ``1 + max |q|``.
 
     Parameters
     ----------
@@ -414,35 +411,24 @@ def solve_active_set(P, q, T, t0, low, high, nl, fixed, upper, lower, tol_tau, t
     n = P.shape[0]
     nj = n - nl
     tol_multiplier = tol_multiplier * (1.0 + np.max(np.abs(q)))
-    x = np.zeros(n)
-    for _ in range(max_rounds):
-        x, multiplier, gradient = _solve_equalities(P, q, T, t0, low, high, nl, fixed,
-                                                    upper, lower)
-        if not np.all(np.isfinite(x)):
+    x, multiplier, gradient = _solve_equalities(P, q, T, t0, low, high, nl, fixed, upper,
+                                                lower)
+    if not np.all(np.isfinite(x)):
+        return x, False
+    for i in range(nl):
+        if fixed[i]:
+            if gradient[nj + i] < -tol_multiplier:
+                return x, False
+        elif x[nj + i] < -tol_force:
             return x, False
-        ok = True
-        for i in range(nl):
-            if fixed[i]:
-                if gradient[nj + i] < -tol_multiplier:
-                    fixed[i] = False
-                    ok = False
-            elif x[nj + i] < -tol_force:
-                fixed[i] = True
-                ok = False
-        tau = T @ x + t0
-        for k in range(nj):
-            if (upper[k] or lower[k]) and multiplier[k] < -tol_multiplier:
-                upper[k] = lower[k] = False
-                ok = False
-            elif tau[k] > high[k] + tol_tau[k]:
-                upper[k] = True
-                ok = False
-            elif tau[k] < low[k] - tol_tau[k]:
-                lower[k] = True
-                ok = False
-        if ok:
-            return x, True
-    return x, False
+    tau = T @ x + t0
+    for k in range(nj):
+        if upper[k] or lower[k]:
+            if multiplier[k] < -tol_multiplier:
+                return x, False
+        elif tau[k] > high[k] + tol_tau[k] or tau[k] < low[k] - tol_tau[k]:
+            return x, False
+    return x, True
 
 
 @njit(cache=True, nogil=True)

@@ -28,8 +28,8 @@ torques are at a bound) rarely changes. So it is first solved with the last step
 set as equalities (:func:`controller.kernels.solve_active_set`: the edges remembered with
 the planned contacts' geoms in the MuJoCo state's ``userdata``, so that a rollout from a
 saved state solves exactly as the run did; the torques at a bound read from the applied
-torques), and the full problem's KKT conditions checked, the guess mended up to
-:data:`WARM_ROUNDS` times. Where it fails, or the contacts changed, ``quadprog``
+torques), and the full problem's KKT conditions checked. Where they fail, or the contacts
+changed, ``quadprog``
 (Goldfarb-Idnani, dense) solves it from scratch, with the torque bounds of the hinges whose
 applied torque is near a bound in the first solve and any other bound its solution breaks in
 the next (the minimiser is that of the QP with every bound either way: the problem is
@@ -73,8 +73,6 @@ AT_BOUND = 1e-6
 FORCE_TOLERANCE = 1e-12
 #: ... or a multiplier below minus this times 1 + the largest linear term of the QP.
 MULTIPLIER_TOLERANCE = 1e-14
-#: Rounds of mending a guessed active set before the QP is solved from scratch.
-WARM_ROUNDS = 3
 _NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
 
 
@@ -217,7 +215,7 @@ class WholeBodyID:
                 try:
                     x, ok = solve_active_set(P, q, T, t0, self.low, self.high, nl, fixed,
                                              upper, lower, self.tolerance, FORCE_TOLERANCE,
-                                             MULTIPLIER_TOLERANCE, WARM_ROUNDS)
+                                             MULTIPLIER_TOLERANCE)
                 except np.linalg.LinAlgError:  # a guess with no solution: not this one
                     ok = False
                 x = x if ok else None
