@@ -6,7 +6,12 @@ small damped least-squares problem for its swing leg. Built with numpy, the QP's
 dozen array calls cost more than their arithmetic and more than the solver; here each set-up
 is one call. :func:`qp_terms` gives the terms of the least-squares rows documented in
 :mod:`controller.wbc`, with ``x = [qdd_joints; lambda]``: the cost ``1/2 x^T P x - q^T x``
-and the inequalities ``C^T x >= d`` (quadprog's convention).
+and the inequalities ``C^T x >= d`` (quadprog's convention); :func:`solve_active_set`
+solves it from a guessed active set (the warm start), :func:`recall_active` and
+:func:`remember_active` keep that guess in the MuJoCo state's user data. The rest is the
+step's small glue, each piece one call instead of a handful of numpy calls: the reference
+between frames, the targets clipped into the joint ranges, the desired acceleration, the
+floor contacts, the swing foot's capture shift and its leg's joint change.
 """
 
 from __future__ import annotations
