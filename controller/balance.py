@@ -60,7 +60,8 @@ Per-frame figures (``BalanceRun``):
 - ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
   step, and whether the controller asked for the joint's whole strength or more (the QP
   keeps its torques within the strength, so a bound it leans on is met to rounding:
-  within :data:`SATURATION_TOLERANCE` of the strength counts as at it).
+  within :data:`controller.wbc.AT_BOUND` of the strength counts as at it, the share the
+  QP's warm start also reads a bound from).
 
 The character has **fallen** when its pelvis or head is below half its standing height
 while the reference's is not (:mod:`controller.falls`); the simulation then
@@ -96,8 +97,6 @@ DAMPING_RATIO = 1.0
 MAX_ACCELERATION = 300.0
 #: Targets are kept this far inside each hinge's range, degrees.
 LIMIT_MARGIN_DEG = 2.0
-#: A planned torque within this share of the joint's strength of a bound is at it.
-SATURATION_TOLERANCE = 1e-6
 
 
 class Mode(NamedTuple):
@@ -346,9 +345,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
     torque_range = _torque_range(sim)
     low_nm, high_nm = torque_range.T
-    strength_nm = np.maximum(np.abs(low_nm), np.abs(high_nm))
-    at_bound_nm = SATURATION_TOLERANCE * np.where(np.isfinite(strength_nm), strength_nm, 0.0)
     solver = WholeBodyID(sim, joint_dofs, torque_range)
+    at_bound_nm = solver.at_bound[solver.hinge_row]  # per actuator
 
     layout = joint_layout(sim)
     margin = np.deg2rad(LIMIT_MARGIN_DEG)

@@ -66,7 +66,8 @@ FRICTION = 0.8
 NEAR_BOUND = 0.2
 #: A solution breaks a bound when it passes it by more than this share of the strength.
 BOUND_TOLERANCE = 1e-9
-#: An applied torque within this share of the strength of a bound is guessed to be at it.
+#: A torque within this share of the joint's strength of a bound is at it (the warm start's
+#: guess from the applied torques; the balance controller's saturation share).
 AT_BOUND = 1e-6
 #: A guessed active set is wrong where an edge magnitude (body weights) is below minus
 #: this ...

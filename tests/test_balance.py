@@ -148,11 +148,11 @@ def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_
     # the QP keeps its torques within each joint's strength, so a bound it leans on is
     # met to rounding: those frames count as saturated, whichever side of it rounding
     # put the planned torque, and the torque applied there is the strength itself
-    from controller.balance import SATURATION_TOLERANCE
+    from controller.wbc import AT_BOUND
 
     run = walk_run
     low, high = torque_model(model02).actuator_forcerange.T
-    tol = SATURATION_TOLERANCE * np.maximum(-low, high)
+    tol = AT_BOUND * np.maximum(-low, high)
     up = np.all(np.isfinite(run.torque_nm), axis=1)
     up[0] = False
     torque = run.torque_nm[up]
