@@ -144,7 +144,7 @@ PLACEMENT = True
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
                "torque_saturation_share", "contact_force_peak_bw", "torque_peak_nm",
-               "wall_s_per_sim_s")
+               "trouble_time_s", "ends_in_trouble", "wall_s_per_sim_s")
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,6 +177,10 @@ class BalanceRun:
     torque_saturated : ndarray of bool, shape (T, nu)
     limit_rows, self_contacts : ndarray of int, shape (T,)
         Active joint-limit constraint rows and self-contacts at each frame.
+    trouble : ndarray of bool, shape (T,)
+        Frames the run went on from in trouble by the search's test (:func:`trouble_rule`):
+        the search had spent its budget, had no mode left within reach, or was resting
+        after running again the attempt that got furthest.
     warnings : dict of str to int
         MuJoCo's warning counters that are not zero.
     external_force_peak : float
@@ -230,6 +234,7 @@ class BalanceRun:
     torque_saturated: np.ndarray
     limit_rows: np.ndarray
     self_contacts: np.ndarray
+    trouble: np.ndarray
     warnings: dict
     external_force_peak: float
     weight_n: float
@@ -387,6 +392,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     saturated = np.zeros((n_frames, nu), dtype=bool)
     limit_rows = np.zeros(n_frames, dtype=int)
     self_contacts = np.zeros(n_frames, dtype=int)
+    trouble = np.zeros(n_frames, dtype=bool)
     limit_type = int(mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT)
     qpos[0] = data.qpos
     contact[0] = _floor_normal_force(sim, data)
@@ -483,6 +489,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     restarted(back)
                     continue
             qpos[t] = data.qpos
+            trouble[t] = search.troubled(data, t)
             contact[t] = _floor_normal_force(sim, data)
             torque[t] = data.actuator_force
             external = max(external, float(np.abs(data.xfrc_applied).max()))
@@ -508,6 +515,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     saturated[stop_frame:] = False
     limit_rows[stop_frame:] = 0
     self_contacts[stop_frame:] = 0
+    trouble[stop_frame:] = False
 
     joint_err, body_err, drift, com_err = reference_errors(sim, qpos, ref)
     return BalanceRun(
@@ -518,7 +526,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
         com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
         torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
-        warnings=warning_counts(data),
+        trouble=trouble, warnings=warning_counts(data),
         external_force_peak=external, weight_n=figures.weight_n, wall_s=wall,
         sim_s=ctrl_steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
         segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
@@ -783,6 +791,7 @@ class _Search:
         return np.array([self._mode_of(i) for i in range(n)], dtype=int)
 
     def in_trouble(self, data, t: int) -> bool:
+        """Whether the search acts on trouble at frame ``t`` (it is not resting)."""
         return t > self.quiet_until and self.troubled(data, t)
 
     def troubled(self, data, t: int) -> bool:
@@ -903,7 +912,9 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
 
     Errors, drift and forces are over the frames of the window before the fall (NaN when
     there are none); ``fell`` is 1.0 when the character fell at or before the window's
-    last frame.
+    last frame. ``trouble_time_s`` is the time of those frames the character spent in
+    trouble (:func:`trouble_rule`) and ``ends_in_trouble`` 1.0 when the last of them is
+    in trouble (it did not fall, but was going down where the window or the run ended).
 
     Returns
     -------
@@ -937,8 +948,19 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
         "torque_saturation_share": stat(run.torque_saturated[up].ravel(), np.mean),
         "contact_force_peak_bw": stat(run.contact_force_n[up] / run.weight_n, np.max),
         "torque_peak_nm": stat(np.abs(run.torque_nm[up]).ravel(), np.max),
+        "trouble_time_s": float(np.count_nonzero(run.trouble[up])) / run.fps,
+        "ends_in_trouble": float(run.trouble[up[-1]]) if up.size else math.nan,
         "wall_s_per_sim_s": run.wall_s_per_sim_s,
     }
+
+
+def trouble_rule() -> str:
+    """The search's test for trouble (:meth:`_Search.troubled`) in words."""
+    tilt_deg = math.degrees(math.acos(TROUBLE_UP))
+    return (f"in trouble: the pelvis more than {100 * TROUBLE_DROP_M:.0f} cm below the "
+            f"reference's, or the head more than {100 * TROUBLE_HEAD_DROP_M:.0f} cm below "
+            f"the reference's, or the pelvis's up axis more than {tilt_deg:.0f} deg from "
+            "vertical")
 
 
 def _gains(nv: int):

@@ -13,8 +13,8 @@ import numpy as np
 PART_FIELDS = ("fell", "fall_time_s", "error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "com_height_error_m",
                "contact_force_peak_bw", "contact_force_mean_bw", "torque_peak_nm",
-               "torque_mean_nm", "torque_saturation_share", "wall_s_per_sim_s",
-               "raw_steps_per_step")
+               "torque_mean_nm", "torque_saturation_share", "trouble_time_s",
+               "ends_in_trouble", "wall_s_per_sim_s", "raw_steps_per_step")
 
 
 class BalanceTracking:
@@ -95,6 +95,9 @@ class BalanceTracking:
             "torque_peak_nm": w["torque_peak_nm"],
             "torque_mean_nm": float(np.mean(torque)) if up.size else math.nan,
             "torque_saturation_share": w["torque_saturation_share"],
+            "trouble_time_s": w["trouble_time_s"],
+            "ends_in_trouble": (bool(w["ends_in_trouble"]) if math.isfinite(w["ends_in_trouble"])
+                                else None),
             "wall_s_per_sim_s": w["wall_s_per_sim_s"],
             "raw_steps_per_step": run.raw_steps_per_step,
         }
@@ -103,6 +106,8 @@ class BalanceTracking:
 
     def run_summary(self) -> dict:
         """Whole-run figures, JSON-ready."""
+        from controller.balance import trouble_rule
+
         run = self.run
         return {
             "mode": self.mode,
@@ -112,6 +117,7 @@ class BalanceTracking:
             "seed": run.seed,
             "fall_frame": run.fall_frame,
             "fall_rule": self.fall_rule,
+            "trouble_rule": trouble_rule(),
             "diverged_frame": run.diverged_frame,
             "warnings": dict(run.warnings),
             "limit_active_frames": int((run.limit_rows > 0).sum()),

@@ -99,9 +99,15 @@ def _feet_lifted(model):
     return qpos, fps
 
 
-def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(model02):
+@pytest.fixture(scope="module")
+def lifted(model02):
+    """The run of :func:`_feet_lifted`'s reference: ``(qpos, fps, run)``."""
     qpos, fps = _feet_lifted(model02)
-    run = follow(model02, qpos, fps)
+    return qpos, fps, follow(model02, qpos, fps)
+
+
+def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(lifted):
+    qpos, fps, run = lifted
     assert run.fell
     assert 0.5 < run.fall_time_s < 2.5
     assert run.fall_frame == round(run.fall_time_s * fps)
@@ -115,6 +121,36 @@ def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(model02):
     whole = window_summary(run, 0, qpos.shape[0])
     assert whole["fell"] == 1.0 and whole["fall_time_s"] == pytest.approx(run.fall_time_s)
     assert np.isfinite(whole["joint_error_deg_rms"])
+
+
+def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
+    from controller.balance import TROUBLE_UP
+    from controller.qpos import free_joint
+
+    # with both feet drawn up the character goes down: the search spends its budget and
+    # the run goes on in trouble until the fall, so the part that ends at the fall ends
+    # in trouble
+    qpos, fps, run = lifted
+    before = window_summary(run, 0, run.fall_frame)
+    trouble = np.flatnonzero(run.trouble[:run.fall_frame])
+    assert trouble.size > 0
+    assert before["trouble_time_s"] == pytest.approx(trouble.size / fps)
+    assert before["ends_in_trouble"] == 1.0
+    # recorded with the frame's own state: a pelvis tilted past the test is trouble there
+    sim = torque_model(model02)
+    data = mujoco.MjData(sim)
+    pelvis = sim.jnt_bodyid[free_joint(sim)]
+    tilted = []
+    for t in range(1, run.fall_frame):
+        data.qpos[:] = run.qpos[t]
+        mujoco.mj_kinematics(sim, data)
+        if data.xmat[pelvis, 8] < TROUBLE_UP:
+            tilted.append(t)
+    assert tilted and run.trouble[tilted].all()
+    # a walk it follows closely is never in trouble
+    whole = window_summary(walk_run, 0, walk.n_frames)
+    assert not walk_run.trouble.any()
+    assert whole["trouble_time_s"] == 0.0 and whole["ends_in_trouble"] == 0.0
 
 
 def test_pose_errors_leave_drift_and_heading_apart(model02, walk_qpos):

@@ -152,8 +152,10 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
     for key in ("error_deg_rms", "body_error_mm_mean", "root_drift_m", "com_height_error_m",
                 "contact_force_peak_bw", "torque_peak_nm", "torque_saturation_share",
-                "wall_s_per_sim_s", "raw_steps_per_step"):
+                "trouble_time_s", "wall_s_per_sim_s", "raw_steps_per_step"):
         assert free[key] is not None and free[key] >= 0, key
+    assert isinstance(free["ends_in_trouble"], bool)
+    assert free["trouble_rule"].startswith("in trouble: the pelvis more than 12 cm below")
     simulated_frames = (180 if not free["fell"]
                         else min(180, free["fall_frame"] + 1 + 120))  # 1 s after a fall
 
@@ -170,7 +172,7 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
             fall_frame=None, fall_time_s=None, diverged_frame=None,
             **{k: None for k in ("joint_error_deg", "body_error_mm", "root_drift_m",
                                  "com_height_error_m", "contact_force_n", "torque_nm",
-                                 "torque_saturated", "limit_rows", "self_contacts",
+                                 "torque_saturated", "limit_rows", "self_contacts", "trouble",
                                  "warnings", "external_force_peak", "weight_n", "wall_s",
                                  "sim_s", "raw_step_s", "segment_modes", "retries",
                                  "simulated_steps")})

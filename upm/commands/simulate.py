@@ -256,6 +256,10 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
         line = "  free root" + (f" ({free['controller']})" if "controller" in free else "")
         line += ": " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
                         else "does not fall")
+        if free.get("ends_in_trouble") and not free["fell"]:
+            line += " but ends in trouble (going down where the sequence ends)"
+        if free.get("trouble_time_s"):
+            line += f", {free['trouble_time_s']:.2f} s in trouble"
         if free.get("body_error_mm_mean") is not None:
             line += (f", joint error {free['error_deg_rms']:.1f} deg RMS, body error "
                      f"{free['body_error_mm_mean']:.0f} mm mean, root drift "
