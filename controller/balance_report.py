@@ -60,6 +60,10 @@ class BalanceTracking:
         return self.run.self_contacts
 
     @property
+    def trouble(self) -> np.ndarray:
+        return self.run.trouble
+
+    @property
     def fallen(self) -> np.ndarray:
         out = np.zeros(self.run.n_frames, dtype=bool)
         if self.run.fall_frame is not None:

@@ -26,8 +26,8 @@ Version 2: the free-root tracking is by default the balance controller
 ``_mean_nm``, ``torque_saturation_share``, ``trouble_time_s`` and ``ends_in_trouble``
 (the time the character went on in trouble, by the search's test in the run's
 ``trouble_rule``, and whether the part's last frame before any fall is in trouble: going
-down without having fallen yet), ``wall_s_per_sim_s`` and ``raw_steps_per_step`` (the
-controller's cost in raw ``mj_step`` equivalents).
+down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`` and
+``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents).
 
 ``software`` names the versions the figures were computed with: a free-root run is
 deterministic on one installation, but its search takes discrete decisions, so another
@@ -102,11 +102,14 @@ def build_report(kind: str, validity: Validity, *, motion: dict | None = None,
     for mode, run in tracking.items():
         error = run.error_deg
         fallen = run.fallen
+        trouble = getattr(run, "trouble", None)  # the balance controller's
         for t, record in enumerate(frames):
             record[f"{mode}_error_deg"] = _num(error[t])
             record[f"{mode}_limit_rows"] = int(run.limit_rows[t])
             record[f"{mode}_self_contacts"] = int(run.self_contacts[t])
             record[f"{mode}_fallen"] = bool(fallen[t])
+            if trouble is not None:
+                record[f"{mode}_trouble"] = bool(trouble[t])
 
     def part_figures(part: slice | None) -> dict:
         out = {"kinematic": summarize(validity, part)}

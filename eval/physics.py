@@ -6,9 +6,10 @@ humanoid's own joint strength) follows the motion from :data:`CONTEXT_S` before 
 to :data:`CONTEXT_S` after it — the same context for every method: clip 1's own frames
 before, clip 2's after — and the figures of :data:`PHYSICS_METRICS` are recorded: whether
 the character fell (anywhere in the run) and when relative to the window's first frame,
-and, over the window's frames before any fall, how far it was from the method's own motion
-(joint angles, body positions), how far it drifted, how often it asked for more torque
-than the joint has and the peak floor force.
+whether it was going down at the run's end without having fallen (in trouble by the
+balance search's test), and, over the window's frames before any fall, how far it was from
+the method's own motion (joint angles, body positions), how far it drifted, how often it
+asked for more torque than the joint has and the peak floor force.
 
 A unit of work is one (pair or real window, method, window length): :func:`task_list`
 names them, :func:`run_unit` runs one in a worker (:mod:`eval.executor`: a local pool or
@@ -37,7 +38,7 @@ if TYPE_CHECKING:
 CONTEXT_S = 0.5
 CHECKPOINT_NAME = "physics-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/physics-checkpoint"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,13 @@ class PhysicsMetric:
 _METRICS = (
     PhysicsMetric("fell", "share", "falls %",
                   "1 if the character fell during the run (before, in or after the window)"),
+    PhysicsMetric("ends_in_trouble", "share", "ends going down %",
+                  "1 if the character did not fall but was in trouble at the run's last "
+                  "frame (controller.balance.trouble_rule: pelvis or head well below the "
+                  "motion's, or the pelvis tilted): going down where the run ends"),
+    PhysicsMetric("fell_or_going_down", "share", "falls or going down %",
+                  "1 if the character fell or ended going down: the run did not end with "
+                  "the character up and out of trouble"),
     PhysicsMetric("fall_after_window_start_s", "s", "fall time s",
                   "when it fell, seconds after the window's first frame (negative: "
                   "before the window); NaN if it did not"),
@@ -83,7 +91,8 @@ _METRICS = (
 #: The free-root figures, by name: the one registry every writer reads.
 PHYSICS_METRICS = {m.name: m for m in _METRICS}
 #: Shares shown as percentages in the tables.
-PERCENT = frozenset({"fell", "torque_saturation_share"})
+PERCENT = frozenset({"fell", "ends_in_trouble", "fell_or_going_down",
+                     "torque_saturation_share"})
 
 
 @dataclass(frozen=True)
@@ -160,12 +169,16 @@ def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
     run = follow(model, to_qpos(model, motion), motion.fps)
     summary = window_summary(run, start, stop)
     fell = run.fall_frame is not None
+    going_down = 0.0 if fell else window_summary(run, 0, run.n_frames)["ends_in_trouble"]
     return {
         "fell": 1.0 if fell else 0.0,
+        "ends_in_trouble": going_down,
+        "fell_or_going_down": 1.0 if fell or going_down == 1.0 else 0.0,
         "fall_after_window_start_s": ((run.fall_frame - start) / motion.fps if fell
                                       else math.nan),
         **{name: summary[name] for name in PHYSICS_METRICS
-           if name not in ("fell", "fall_after_window_start_s")},
+           if name not in ("fell", "ends_in_trouble", "fell_or_going_down",
+                           "fall_after_window_start_s")},
     }
 
 

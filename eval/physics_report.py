@@ -13,8 +13,9 @@ if TYPE_CHECKING:
     from eval.summaries import Summaries
 
 #: The columns of the Markdown and terminal tables.
-TABLE_METRICS = ("fell", "joint_error_deg_rms", "body_error_mm_mean", "root_drift_m",
-                 "torque_saturation_share", "contact_force_peak_bw")
+TABLE_METRICS = ("fell", "ends_in_trouble", "fell_or_going_down", "joint_error_deg_rms",
+                 "body_error_mm_mean", "root_drift_m", "torque_saturation_share",
+                 "contact_force_peak_bw")
 
 
 def _fmt(metric: str, value, signed: bool = False) -> str:
@@ -67,6 +68,9 @@ def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int) -> s
         f"(controller.balance: root free, no external force, each joint's strength) follows "
         f"each method's motion from {CONTEXT_S:g} s before the window to {CONTEXT_S:g} s "
         f"after it. Falls: share of runs in which the character fell (anywhere in the run); "
+        f"going down: share of runs in which it did not fall but ended in trouble (the "
+        f"balance search's test: pelvis or head well below the motion's, or the pelvis "
+        f"tilted); "
         f"errors over the window's frames before any fall, against the method's own motion "
         f"(n: runs with such frames). Mean [95 % bootstrap interval].",
     ]
@@ -103,17 +107,17 @@ def physics_text(statistics: Summaries, frames: int, methods) -> str:
 
 
 def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, methods) -> None:
-    """Fall rate and joint error per method beside the real windows (bars with 95 %
-    intervals)."""
+    """Falls (with the runs that end going down stacked on them), joint and body error per
+    method beside the real windows (bars with 95 % intervals: of falls or going down in
+    the first panel)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     names = [*methods, REAL]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
-    for ax, metric in zip(axes, ("fell", "joint_error_deg_rms", "body_error_mm_mean"),
-                          strict=True):
+
+    def bars(metric):
         scale = 100.0 if metric in PERCENT else 1.0
         means, los, his = [], [], []
         for name in names:
@@ -122,13 +126,28 @@ def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, me
             means.append(m * scale)
             los.append((m - (iv["lo"] if iv["lo"] is not None else m)) * scale)
             his.append(((iv["hi"] if iv["hi"] is not None else m) - m) * scale)
-        colours = ["#7f8c8d" if n == REAL else ("#c0392b" if n == "upm" else
-                   "#27ae60" if n == "feasible" else "#2c3e50") for n in names]
-        ax.bar(range(len(names)), means, yerr=[los, his], color=colours, capsize=3)
-        ax.set_xticks(range(len(names)))
+        return means, los, his
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    colours = ["#7f8c8d" if n == REAL else ("#c0392b" if n == "upm" else
+               "#27ae60" if n == "feasible" else "#2c3e50") for n in names]
+    x = range(len(names))
+    falls = bars("fell")[0]
+    either, los, his = bars("fell_or_going_down")
+    axes[0].bar(x, falls, color=colours, label="fell")
+    axes[0].bar(x, [e - f for e, f in zip(either, falls, strict=True)], bottom=falls,
+                color=colours, alpha=0.35, yerr=[los, his], capsize=3,
+                label="ends going down")
+    axes[0].set_title(label("fell_or_going_down") + " (pale: going down)")
+    for ax, metric in zip(axes[1:], ("joint_error_deg_rms", "body_error_mm_mean"),
+                          strict=True):
+        means, los, his = bars(metric)
+        ax.bar(x, means, yerr=[los, his], color=colours, capsize=3)
+        ax.set_title(label(metric))
+    for ax in axes:
+        ax.set_xticks(x)
         ax.set_xticklabels(["real" if n == REAL else n for n in names], rotation=45,
                            ha="right")
-        ax.set_title(label(metric))
         ax.grid(axis="y", alpha=0.3)
     fig.suptitle(f"Free-root test: the balance controller performs each window "
                  f"(L = {frames}; {CONTEXT_S:g} s context each side; grey: real windows)")

@@ -6,6 +6,7 @@ table refuses a misspelt metric."""
 
 import math
 
+import numpy as np
 import pytest
 
 from eval.physics import PHYSICS_METRICS, StudyIncomplete, run_physics
@@ -37,6 +38,11 @@ def test_every_method_and_the_real_windows_have_finite_physics_figures(local_run
         assert set(fell) <= {0.0, 1.0}
         fall_time = records.values(kind, 20, method, "fall_after_window_start_s")
         assert all(math.isnan(t) == (f == 0.0) for f, t in zip(fell, fall_time, strict=True))
+        # going down at the end is counted only where the character did not fall
+        down = records.values(kind, 20, method, "ends_in_trouble")
+        assert set(down) <= {0.0, 1.0} and not np.any((down == 1.0) & (fell == 1.0))
+        either = records.values(kind, 20, method, "fell_or_going_down")
+        np.testing.assert_array_equal(either, np.maximum(fell, down))
         for metric in PHYSICS_METRICS:
             if metric in ("fell", "fall_after_window_start_s"):
                 continue

@@ -155,6 +155,8 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
                 "trouble_time_s", "wall_s_per_sim_s", "raw_steps_per_step"):
         assert free[key] is not None and free[key] >= 0, key
     assert isinstance(free["ends_in_trouble"], bool)
+    trouble = [f["free_trouble"] for f in report["frames"]]
+    assert free["trouble_time_s"] == pytest.approx(sum(trouble) / 120.0, abs=1e-5)
     assert free["trouble_rule"].startswith("in trouble: the pelvis more than 12 cm below")
     simulated_frames = (180 if not free["fell"]
                         else min(180, free["fall_frame"] + 1 + 120))  # 1 s after a fall
