@@ -195,20 +195,25 @@ def test_servo_controller_is_still_available(tmp_path, data_dir):
     assert "body_error_mm_mean" not in report["totals"]["tracking"]["free"]
 
 
-def test_search_budget_is_recorded_and_checked(tmp_path, data_dir, capsys):
+def test_search_budget_and_offsets_are_recorded_and_checked(tmp_path, data_dir, capsys):
     out = tmp_path / "b.json"
     assert main(["simulate", "--data", str(data_dir), "--method", "linear",
                  "--sequence", "02_01@0:60", "--modes", "free", "--no-window-runs",
-                 "--search-budget", "0", "--report", str(out)]) == 0
+                 "--search-budget", "0", "--offset-deg", "0.1", "--offset-seed", "3",
+                 "--report", str(out)]) == 0
     report = json.loads(out.read_text())
     assert report["settings"]["tracking"]["search_budget"] == 0.0
+    assert report["sequence"]["offset_deg"] == 0.1 and report["sequence"]["offset_seed"] == 3
+    assert "moved by N(0, 0.1 deg) per channel, seed 3" in capsys.readouterr().out
     free = report["totals"]["tracking"]["free"]
     assert free["search_retries"] == 0 and free["simulated_steps"] == free["steps"]
     capsys.readouterr()
     for args, message in [(["--search-budget", "-1"], "from 0 to 1000"),
                           (["--search-budget", "nan"], "from 0 to 1000"),
                           (["--search-budget", "2", "--controller", "servo"],
-                           "the balance controller's")]:
+                           "the balance controller's"),
+                          (["--offset-deg", "-0.1"], "--offset-deg -0.1: use a number"),
+                          (["--offset-deg", "inf"], "from 0 to 10")]:
         assert main(["simulate", "--data", str(data_dir), "--method", "linear",
                      "--sequence", "02_01@0:60", "--report", str(tmp_path / "x.json"), *args]) == 2
         err = capsys.readouterr().err
