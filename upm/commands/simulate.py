@@ -27,6 +27,11 @@ controller applied at every physics step (.npz: replayable open-loop with
 controller.balance.replay); --filmstrip a PNG of the frames around each
 window; --viewer plays it in MuJoCo's viewer where there is a display.
 
+A free-root run is one path of a chaotic system: whether it falls can turn on differences
+far under mocap's precision. --offset-deg 0.1 with a few --offset-seed values runs the
+same sequence with every joint angle moved by its own small constant, to see how often an
+outcome holds.
+
 Example:
   upm simulate --map upm.npz --sequence 02_01@0:200 02_03@20:150 --report r.json --video r.mp4
 """
