@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from upm.dropouts import dropout_mask
 from upm.perturb import offset_joint_angles
 
 
@@ -20,11 +21,11 @@ def test_each_channel_moves_by_one_constant_and_zeros_stay(start_of_16_15, sigma
     motion = start_of_16_15
     moved = offset_joint_angles(motion, sigma_deg, seed)
     before, after = motion.posture_deg, moved.posture_deg
-    zero = before == 0.0
-    assert zero.any() and np.all(after[zero] == 0.0)
-    # one constant per channel over the frames where it is not zero
+    kept = dropout_mask(before) | np.all(before == 0.0, axis=0)
+    assert dropout_mask(before).any() and np.all(after[kept] == before[kept])
+    # one constant per channel over every other frame, an exact zero among them
     for channel in range(before.shape[1]):
-        shift = (after - before)[~zero[:, channel], channel]
+        shift = (after - before)[~kept[:, channel], channel]
         assert shift.size == 0 or np.ptp(shift) < 1e-9
     np.testing.assert_array_equal(moved.root, motion.root)
     again = offset_joint_angles(motion, sigma_deg, seed)
@@ -48,6 +49,19 @@ def test_a_bad_spread_is_refused(walk):
             offset_joint_angles(walk, sigma, 0)
 
 
+def test_a_zero_that_is_no_dropout_moves_with_its_channel(walk):
+    # 02_01 has channels that pass through exactly zero for a frame: no dropout
+    before = walk.posture_deg
+    isolated = (before == 0.0) & ~dropout_mask(before) & ~np.all(before == 0.0, axis=0)
+    assert isolated.any()
+    after = offset_joint_angles(walk, 0.1, 1).posture_deg
+    frame, channel = np.argwhere(isolated)[0]
+    other = (frame + 1) % len(before)
+    assert after[frame, channel] != 0.0
+    assert after[frame, channel] - before[frame, channel] == pytest.approx(
+        after[other, channel] - before[other, channel], abs=1e-9)
+
+
 def test_a_moved_clip_keeps_its_marker_dropouts(catalog, start_of_16_15):
     import mujoco
 
@@ -57,6 +71,10 @@ def test_a_moved_clip_keeps_its_marker_dropouts(catalog, start_of_16_15):
 
     model = mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("16")))
     _, count = fill_dropouts(model, to_qpos(model, start_of_16_15))
+    # the same (bone, frame) dropouts on the AMC channels as on the humanoid's hinges
+    mask = dropout_mask(start_of_16_15.posture_deg)
+    assert mask.reshape(len(mask), 21, 3).any(axis=2).sum() == count
     moved = offset_joint_angles(start_of_16_15, 0.1, 1)
     _, moved_count = fill_dropouts(model, to_qpos(model, moved))
     assert count >= 2 and moved_count == count
+

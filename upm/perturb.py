@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from upm.dropouts import dropout_mask
+
 
 def offset_joint_angles(motion, sigma_deg: float, seed: int):
     """The motion with each joint channel moved by one constant over all its frames.
@@ -27,14 +29,15 @@ def offset_joint_angles(motion, sigma_deg: float, seed: int):
     Returns
     -------
     upm.motion.Motion
-        A copy. Values that read exactly zero stay zero: a channel the skeleton does not
-        declare, and a bone's marker dropouts (CMU writes a lost bone's angles as exact
-        zeros; :mod:`controller.dropouts` recognises them by that). The root is unchanged.
+        A copy. A channel that reads zero throughout (one the skeleton does not declare)
+        and a bone's marker dropouts (:func:`upm.dropouts.dropout_mask`, which the
+        controller fills) stay as they are; every other value moves, a zero among them.
+        The root is unchanged.
     """
     if not (np.isfinite(sigma_deg) and sigma_deg >= 0):
         raise ValueError(f"the offsets' standard deviation must be finite and >= 0, got "
                          f"{sigma_deg!r} deg")
     posture = np.asarray(motion.posture_deg, dtype=float)
     offset_deg = sigma_deg * np.random.default_rng(seed).standard_normal(posture.shape[1])
-    moved = np.where(posture == 0.0, 0.0, posture + offset_deg)
-    return motion.replace(posture_deg=moved)
+    kept = dropout_mask(posture) | np.all(posture == 0.0, axis=0)
+    return motion.replace(posture_deg=np.where(kept, posture, posture + offset_deg))
