@@ -70,8 +70,8 @@ def configure(parser) -> None:
                              "sequences through at more cost)")
     parser.add_argument("--offset-deg", metavar="SIGMA", type=float, default=0.0,
                         help="move every joint angle of the sequence by its own constant "
-                             "drawn from N(0, SIGMA) degrees before simulating (exact "
-                             "zeros, marker dropouts, kept): run with a few --offset-seed "
+                             "drawn from N(0, SIGMA) degrees before simulating (marker "
+                             "dropouts kept): run with a few --offset-seed "
                              "values to see whether a run's outcome holds under "
                              "differences far under mocap's precision (default 0: none)")
     parser.add_argument("--offset-seed", metavar="K", type=int, default=1,
