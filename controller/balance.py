@@ -55,6 +55,10 @@ Per-frame figures (``BalanceRun``):
   about the vertical by its own root heading: pose error, without the root's drift or
   heading drift (tilt counts);
 - ``root_drift_m``: horizontal distance between the simulated and the reference pelvis;
+- ``heading_error_deg``: the simulated pelvis's heading (its x axis in the floor plane)
+  minus the reference's, wrapped to [-180, 180): the turn that, over a walk, becomes the
+  drift (the foot placement's capture offsets are compared in the world frame, so a
+  heading error is steered back, slowly; see :mod:`controller.placement`);
 - ``com_height_error_m``: simulated minus reference centre-of-mass height;
 - ``contact_force_n``: total normal force of the floor on the body;
 - ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
@@ -142,9 +146,9 @@ MIN_TOE_PITCH_RATE = 0.2
 PLACEMENT = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
-               "body_error_mm_peak", "root_drift_m", "com_height_error_m",
-               "torque_saturation_share", "contact_force_peak_bw", "torque_peak_nm",
-               "trouble_time_s", "ends_in_trouble", "wall_s_per_sim_s")
+               "body_error_mm_peak", "root_drift_m", "heading_error_deg_peak",
+               "com_height_error_m", "torque_saturation_share", "contact_force_peak_bw",
+               "torque_peak_nm", "trouble_time_s", "ends_in_trouble", "wall_s_per_sim_s")
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,8 +175,8 @@ class BalanceRun:
         From the run's start.
     diverged_frame : int or None
         Frame at which the state became non-finite (the run stopped).
-    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m, contact_force_n :
-        ndarray, shape (T,)
+    joint_error_deg, body_error_mm, root_drift_m, heading_error_deg : ndarray, shape (T,)
+    com_height_error_m, contact_force_n : ndarray, shape (T,)
     torque_nm : ndarray, shape (T, nu)
     torque_saturated : ndarray of bool, shape (T, nu)
     limit_rows, self_contacts : ndarray of int, shape (T,)
@@ -228,6 +232,7 @@ class BalanceRun:
     joint_error_deg: np.ndarray
     body_error_mm: np.ndarray
     root_drift_m: np.ndarray
+    heading_error_deg: np.ndarray
     com_height_error_m: np.ndarray
     contact_force_n: np.ndarray
     torque_nm: np.ndarray
@@ -517,13 +522,14 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     self_contacts[stop_frame:] = 0
     trouble[stop_frame:] = False
 
-    joint_err, body_err, drift, com_err = reference_errors(sim, qpos, ref)
+    joint_err, body_err, drift, heading_err, com_err = reference_errors(sim, qpos, ref)
     return BalanceRun(
         fps=float(fps), timestep_s=dt, substeps=substeps, seed=int(seed),
         start_qpos=start, start_qvel=start_qvel, qpos=qpos, ctrl=ctrl,
         fell=fall is not None, fall_frame=fall,
         fall_time_s=None if fall is None else fall / float(fps), diverged_frame=diverged,
         joint_error_deg=joint_err, body_error_mm=body_err, root_drift_m=drift,
+        heading_error_deg=heading_err,
         com_height_error_m=com_err, contact_force_n=contact, torque_nm=torque,
         torque_saturated=saturated, limit_rows=limit_rows, self_contacts=self_contacts,
         trouble=trouble, warnings=warning_counts(data),
@@ -944,6 +950,7 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
         "body_error_mm_mean": stat(run.body_error_mm[up], np.mean),
         "body_error_mm_peak": stat(run.body_error_mm[up], np.max),
         "root_drift_m": stat(run.root_drift_m[up], np.max),
+        "heading_error_deg_peak": stat(np.abs(run.heading_error_deg[up]), np.max),
         "com_height_error_m": stat(np.abs(run.com_height_error_m[up]), np.mean),
         "torque_saturation_share": stat(run.torque_saturated[up].ravel(), np.mean),
         "contact_force_peak_bw": stat(run.contact_force_n[up] / run.weight_n, np.max),

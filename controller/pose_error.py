@@ -1,6 +1,6 @@
 """How far a simulated trajectory is from its reference, per frame: joint angles, body
-pose (relative to the pelvis and its heading), the pelvis's horizontal drift and the
-centre of mass's height (definitions in :mod:`controller.balance`)."""
+pose (relative to the pelvis and its heading), the pelvis's horizontal drift and heading,
+and the centre of mass's height (definitions in :mod:`controller.balance`)."""
 
 from __future__ import annotations
 
@@ -20,8 +20,9 @@ def reference_errors(model, qpos, reference_qpos):
 
     Returns
     -------
-    joint_error_deg, body_error_mm, root_drift_m, com_height_error_m : ndarray, shape (T,)
-        As defined in the module docstring.
+    joint_error_deg, body_error_mm, root_drift_m, heading_error_deg, com_height_error_m :
+        ndarray, shape (T,) each, as defined in :mod:`controller.balance`
+        (``heading_error_deg`` signed, in [-180, 180)).
     """
     import mujoco
 
@@ -33,6 +34,7 @@ def reference_errors(model, qpos, reference_qpos):
     joint = np.full(n, np.nan)
     body = np.full(n, np.nan)
     drift = np.full(n, np.nan)
+    heading_deg = np.full(n, np.nan)
     com = np.full(n, np.nan)
     data = mujoco.MjData(model)
     pelvis = 1
@@ -51,12 +53,13 @@ def reference_errors(model, qpos, reference_qpos):
             c, s = math.cos(-heading), math.sin(-heading)
             rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
             poses.append((x @ rot.T, data.xpos[pelvis, :2].copy(),
-                          float(data.subtree_com[pelvis, 2])))
-        (sim_x, sim_xy, sim_com), (ref_x, ref_xy, ref_com) = poses
+                          float(data.subtree_com[pelvis, 2]), heading))
+        (sim_x, sim_xy, sim_com, sim_h), (ref_x, ref_xy, ref_com, ref_h) = poses
         body[t] = 1000.0 * float(np.mean(np.linalg.norm(sim_x - ref_x, axis=1)))
         drift[t] = float(np.linalg.norm(sim_xy - ref_xy))
+        heading_deg[t] = math.degrees((sim_h - ref_h + math.pi) % (2 * math.pi) - math.pi)
         com[t] = sim_com - ref_com
-    return joint, body, drift, com
+    return joint, body, drift, heading_deg, com
 
 
 def _heading(rotation) -> float:

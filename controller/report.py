@@ -22,9 +22,10 @@ Version 2: the free-root tracking is by default the balance controller
 (``controller.balance``; ``settings.tracking.free_controller``), and its part figures
 (totals, windows, pieces, and each window's own ``free_window`` run) add to ``fell``,
 ``fall_time_s`` and ``error_deg_rms``: ``body_error_mm_mean``/``_peak``, ``root_drift_m``,
-``com_height_error_m``, ``contact_force_peak_bw``/``_mean_bw``, ``torque_peak_nm``/
-``_mean_nm``, ``torque_saturation_share``, ``trouble_time_s`` and ``ends_in_trouble``
-(the time the character went on in trouble, by the search's test in the run's
+``heading_error_deg_peak`` (added within version 2; readers of older version-2 reports
+find it missing), ``com_height_error_m``, ``contact_force_peak_bw``/``_mean_bw``,
+``torque_peak_nm``/``_mean_nm``, ``torque_saturation_share``, ``trouble_time_s`` and
+``ends_in_trouble`` (the time the character went on in trouble, by the search's test in the run's
 ``trouble_rule``, and whether the part's last frame before any fall is in trouble: going
 down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`` and
 ``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents).

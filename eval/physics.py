@@ -82,6 +82,9 @@ _METRICS = (
                   "peak of the same over the window"),
     PhysicsMetric("root_drift_m", "m", "root drift m",
                   "largest horizontal pelvis distance from the motion's, since the run's start"),
+    PhysicsMetric("heading_error_deg_peak", "deg", "heading error peak °",
+                  "largest difference of the pelvis's heading from the motion's over the "
+                  "window's frames before any fall (the turn the drift comes from)"),
     PhysicsMetric("torque_saturation_share", "share", "torque saturated %",
                   "share of joint x frame samples where the controller asked for more "
                   "than the joint's strength"),

@@ -168,16 +168,24 @@ def test_pose_errors_leave_drift_and_heading_apart(model02, walk_qpos):
     for t in range(3):  # and a heading change about the vertical through the pelvis
         w, x, y, z = moved[t, 3:7]
         moved[t, 3:7] = np.roll((turn * Rotation.from_quat([x, y, z, w])).as_quat(), 1)
-    joint, body, drift, com = reference_errors(model02, moved, ref)
+    joint, body, drift, heading, com = reference_errors(model02, moved, ref)
     np.testing.assert_allclose(drift, 0.5, atol=1e-9)
+    np.testing.assert_allclose(heading, 30.0, atol=1e-6)
+    back = moved.copy()  # turned past the half turn: the error wraps to the short way
+    for t in range(3):
+        w, x, y, z = back[t, 3:7]
+        turned = Rotation.from_euler("z", 170, degrees=True) * Rotation.from_quat([x, y, z, w])
+        back[t, 3:7] = np.roll(turned.as_quat(), 1)
+    np.testing.assert_allclose(reference_errors(model02, back, ref)[3], -160.0, atol=1e-6)
     np.testing.assert_allclose(body, 0.0, atol=1e-6)
     np.testing.assert_allclose(joint, 0.0, atol=1e-9)
     np.testing.assert_allclose(com, 0.0, atol=1e-9)
     bent = ref.copy()
     knee = joint_layout(model02).names.index("ltibia.rx")
     bent[:, joint_layout(model02).qpos_address[knee]] += np.deg2rad(20)
-    joint, body, drift, com = reference_errors(model02, bent, ref)
+    joint, body, drift, heading, com = reference_errors(model02, bent, ref)
     assert np.all(joint > 0) and np.all(body > 5.0) and np.all(drift == 0)
+    np.testing.assert_allclose(heading, 0.0, atol=1e-9)
 
 
 def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_run):

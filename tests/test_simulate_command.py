@@ -150,6 +150,7 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert not window["tracking"]["free"]["fell"]
     assert window["tracking"]["free"]["error_deg_rms"] < 15.0
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
+    assert 0 <= free["heading_error_deg_peak"] <= 180
     for key in ("error_deg_rms", "body_error_mm_mean", "root_drift_m", "com_height_error_m",
                 "contact_force_peak_bw", "torque_peak_nm", "torque_saturation_share",
                 "trouble_time_s", "wall_s_per_sim_s", "raw_steps_per_step"):
@@ -173,10 +174,10 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
             qpos=np.zeros((simulated_frames, model.nq)), ctrl=control["ctrl"], fell=False,
             fall_frame=None, fall_time_s=None, diverged_frame=None,
             **{k: None for k in ("joint_error_deg", "body_error_mm", "root_drift_m",
-                                 "com_height_error_m", "contact_force_n", "torque_nm",
-                                 "torque_saturated", "limit_rows", "self_contacts", "trouble",
-                                 "warnings", "external_force_peak", "weight_n", "wall_s",
-                                 "sim_s", "raw_step_s", "segment_modes", "retries",
+                                 "heading_error_deg", "com_height_error_m", "contact_force_n",
+                                 "torque_nm", "torque_saturated", "limit_rows", "self_contacts",
+                                 "trouble", "warnings", "external_force_peak", "weight_n",
+                                 "wall_s", "sim_s", "raw_step_s", "segment_modes", "retries",
                                  "simulated_steps")})
     replayed = replay(model, run)
     # the AMC holds what the character did: the replay of its torques, to the AMC's

@@ -14,9 +14,9 @@ need --map). The humanoid of the first piece's subject then
     whole-body inverse-dynamics QP at every physics step with the floor contacts, no
     force on the root, the joints' strength limits, and swing-foot placement), or with
     --controller servo the position servos alone (which fall within 0.5-1.4 s). Reported:
-    joint error, body-position error, root drift, centre-of-mass height error, contact
-    forces, joint torques and their saturation, whether and when it falls, and the
-    controller's cost; plus, per window, a free-root run from 0.5 s before the window to
+    joint error, body-position error, root drift and heading error, centre-of-mass height
+    error, contact forces, joint torques and their saturation, whether and when it falls,
+    and the controller's cost; plus, per window, a free-root run from 0.5 s before the window to
     0.5 s after it.
 
 --report writes the JSON report (per frame, per window, per piece, totals) and a CSV
@@ -287,7 +287,8 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
         if free.get("body_error_mm_mean") is not None:
             line += (f", joint error {free['error_deg_rms']:.1f} deg RMS, body error "
                      f"{free['body_error_mm_mean']:.0f} mm mean, root drift "
-                     f"{free['root_drift_m']:.2f} m, {free['wall_s_per_sim_s']:.2f} wall s "
-                     "per simulated s")
+                     f"{free['root_drift_m']:.2f} m, heading off by up to "
+                     f"{free['heading_error_deg_peak']:.0f} deg, "
+                     f"{free['wall_s_per_sim_s']:.2f} wall s per simulated s")
         print(line)
     print(f"report: {json_path} (summary {csv_path})")
