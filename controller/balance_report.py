@@ -12,10 +12,9 @@ import numpy as np
 #: The figures of a part of a balance run in the report (besides ``frames``).
 PART_FIELDS = ("fell", "fall_time_s", "error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "heading_error_deg_peak",
-               "com_height_error_m",
-               "contact_force_peak_bw", "contact_force_mean_bw", "torque_peak_nm",
-               "torque_mean_nm", "torque_saturation_share", "trouble_time_s",
-               "ends_in_trouble", "wall_s_per_sim_s", "raw_steps_per_step")
+               "com_height_error_m", "contact_force_peak_bw", "contact_force_mean_bw",
+               "torque_peak_nm", "torque_mean_nm", "torque_saturation_share",
+               "trouble_time_s", "ends_in_trouble", "wall_s_per_sim_s", "raw_steps_per_step")
 
 
 class BalanceTracking:

@@ -26,23 +26,21 @@ def reference_errors(model, qpos, reference_qpos):
     """
     import mujoco
 
-    from controller.qpos import joint_layout
+    from controller.qpos import joint_layout, wrap_rad
 
-    layout = joint_layout(model)
-    hinge = layout.qpos_address
+    hinge = joint_layout(model).qpos_address
     n = qpos.shape[0]
+    up = np.all(np.isfinite(qpos), axis=1)
     joint = np.full(n, np.nan)
+    joint[up] = np.rad2deg(np.sqrt(np.mean(
+        wrap_rad(qpos[up][:, hinge] - reference_qpos[up][:, hinge]) ** 2, axis=1)))
     body = np.full(n, np.nan)
     drift = np.full(n, np.nan)
-    heading_deg = np.full(n, np.nan)
     com = np.full(n, np.nan)
+    heading_rad = np.full((n, 2), np.nan)  # simulated, reference
     data = mujoco.MjData(model)
     pelvis = 1
-    for t in range(n):
-        if not np.all(np.isfinite(qpos[t])):
-            continue
-        d = np.mod(qpos[t, hinge] - reference_qpos[t, hinge] + np.pi, 2 * np.pi) - np.pi
-        joint[t] = np.rad2deg(np.sqrt(np.mean(d ** 2)))
+    for t in np.flatnonzero(up):
         poses = []
         for q in (qpos[t], reference_qpos[t]):
             data.qpos[:] = q
@@ -57,8 +55,9 @@ def reference_errors(model, qpos, reference_qpos):
         (sim_x, sim_xy, sim_com, sim_h), (ref_x, ref_xy, ref_com, ref_h) = poses
         body[t] = 1000.0 * float(np.mean(np.linalg.norm(sim_x - ref_x, axis=1)))
         drift[t] = float(np.linalg.norm(sim_xy - ref_xy))
-        heading_deg[t] = math.degrees((sim_h - ref_h + math.pi) % (2 * math.pi) - math.pi)
         com[t] = sim_com - ref_com
+        heading_rad[t] = sim_h, ref_h
+    heading_deg = np.rad2deg(wrap_rad(heading_rad[:, 0] - heading_rad[:, 1]))
     return joint, body, drift, heading_deg, com
 
 
