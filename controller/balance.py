@@ -84,7 +84,12 @@ from typing import NamedTuple
 import numpy as np
 
 from controller.contacts import floor_contacts
-from controller.kernels import clip_targets, desired_acceleration, reference_at
+from controller.kernels import (
+    clip_targets,
+    clip_torques,
+    desired_acceleration,
+    reference_at,
+)
 
 #: Seconds simulated after a fall before the run stops.
 AFTER_FALL_S = 1.0
@@ -551,6 +556,8 @@ class _Control:
         from controller.qpos import joint_layout
 
         self.sim, self.smooth = sim, smooth
+        self._mj_step1, self._mj_step2 = mujoco.mj_step1, mujoco.mj_step2
+        self._mj_differentiatePos = mujoco.mj_differentiatePos
         self.ref_qvel, self.ref_qacc = ref_qvel, ref_qacc
         self.substeps, self.solver, self.placement = substeps, solver, placement
         self.n_frames = smooth.shape[0]
@@ -558,7 +565,7 @@ class _Control:
         layout = joint_layout(sim)
         self.hinge_q, self.hinge_v = layout.qpos_address, layout.dof_address
         self.low, self.high = target_range
-        self.low_nm, self.high_nm = np.asarray(torque_range).T
+        self.low_nm, self.high_nm = (np.ascontiguousarray(a) for a in np.asarray(torque_range).T)
         self.q_ref = np.empty(sim.nq)
         self.qd_ref = np.empty(sim.nv)
         self.qdd_ref = np.empty(sim.nv)
@@ -587,15 +594,13 @@ class _Control:
     def step(self, data, k: int, mode: Mode, gain: float | None = None):
         """Control and take physics step ``k``; returns the applied and the planned
         torques, (nu,) each."""
-        import mujoco
-
         sim, n_frames, q_ref, qd_ref, qdd_ref = (self.sim, self.n_frames, self.q_ref,
                                                  self.qd_ref, self.qdd_ref)
         s = k / self.substeps
         i = min(int(s), n_frames - 2)
         reference_at(self.smooth, self.ref_qvel, self.ref_qacc, i, s - i, q_ref, qd_ref,
                      qdd_ref)
-        mujoco.mj_step1(sim, data)
+        self._mj_step1(sim, data)
         frame = min(int(round(s)), n_frames - 1)
         floor = floor_contacts(sim, data)
         floor_bodies = floor[1].tolist()
@@ -606,15 +611,16 @@ class _Control:
         self._flatten_toes(data, q_ref, floor_bodies)
         # targets inside the joint ranges: the limits' forces are not in the plan
         clip_targets(q_ref, qd_ref, qdd_ref, self.hinge_q, self.hinge_v, self.low, self.high)
-        mujoco.mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
+        self._mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
         desired_acceleration(qdd_ref, self.kp, self.err, self.kd, qd_ref, data.qvel,
                              MAX_ACCELERATION, self.qdd_des)
-        tau, _, _ = self.solver.solve(
-            data, self.qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame),
+        how = mode.swing_contacts_excluded
+        tau = self.solver.torques(
+            data, self.qdd_des, exclude=() if how == "none" else self._excluded(how, frame),
             floor=floor)
-        applied = np.clip(tau, self.low_nm, self.high_nm)
+        applied = clip_torques(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied
-        mujoco.mj_step2(sim, data)
+        self._mj_step2(sim, data)
         return applied, tau
 
     def _flatten_toes(self, data, q_ref, floor_bodies) -> None:

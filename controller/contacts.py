@@ -95,10 +95,9 @@ def floor_contacts(model, data) -> tuple[np.ndarray, np.ndarray]:
     """
     from controller.kernels import floor_contact_index
 
-    n = data.ncon
-    if not n:
+    if not data.ncon:
         return _NO_CONTACT
-    return floor_contact_index(data.contact.geom[:n], model.geom_bodyid)
+    return floor_contact_index(data.contact.geom, model.geom_bodyid)
 
 
 _NO_CONTACT = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))

@@ -6,12 +6,16 @@ small damped least-squares problem for its swing leg. Built with numpy, the QP's
 dozen array calls cost more than their arithmetic and more than the solver; here each set-up
 is one call. :func:`qp_terms` gives the terms of the least-squares rows documented in
 :mod:`controller.wbc`, with ``x = [qdd_joints; lambda]``: the cost ``1/2 x^T P x - q^T x``
-and the inequalities ``C^T x >= d`` (quadprog's convention); :func:`solve_active_set`
+and the inequalities ``C^T x >= d`` (quadprog's convention). The controller sets up the
+cost alone (:func:`qp_cost_terms`) and the inequalities only where it solves the QP from
+scratch, with the torque bounds it watches (:func:`watched_constraints`: building the full
+``C`` at every step was about a sixth of the set-up); :func:`solve_active_set`
 solves it from a guessed active set (the warm start), :func:`recall_active` and
 :func:`remember_active` keep that guess in the MuJoCo state's user data. The rest is the
 step's small glue, each piece one call instead of a handful of numpy calls: the reference
 between frames, the targets clipped into the joint ranges, the desired acceleration, the
-floor contacts, the swing foot's capture shift and its leg's joint change.
+floor contacts, the swing foot's capture shift and its leg's joint change, the applied
+torques clipped into their range.
 """
 
 from __future__ import annotations
@@ -23,7 +27,21 @@ from numba import njit
 @njit(cache=True, nogil=True)
 def qp_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_contact,
              w_force, torque_scale, contact_damping, low, high):
-    """The QP of one control step.
+    """The QP of one control step: :func:`qp_cost_terms` and :func:`bound_constraints`,
+    ``(P, q, C, d, G, g0, T, t0)``.
+    """
+    P, q, G, g0, T, t0 = qp_cost_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w,
+                                       w_joints, w_contact, w_force, torque_scale,
+                                       contact_damping)
+    C, d = bound_constraints(T, t0, low, high, P.shape[0] - T.shape[0])
+    return P, q, C, d, G, g0, T, t0
+
+
+@njit(cache=True, nogil=True)
+def qp_cost_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_contact,
+                  w_force, torque_scale, contact_damping):
+    """The cost of the QP of one control step, and its accelerations and torques as
+    linear functions of the unknowns.
 
     Parameters
     ----------
@@ -45,16 +63,12 @@ def qp_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_conta
         Weight of each hinge's torque per N m (the torque weight over its strength).
     contact_damping : float
         Desired contact-point acceleration per unit of its velocity, 1/s.
-    low, high : ndarray, shape (nv - 6,)
-        Each hinge's torque range, N m.
 
     Returns
     -------
     P : ndarray, shape (n, n)
         ``n = nv - 6 + 4 nc``.
     q : ndarray, shape (n,)
-    C : ndarray, shape (n, 4 nc + 2 (nv - 6))
-    d : ndarray, shape (4 nc + 2 (nv - 6),)
     G : ndarray, shape (nv, n)
         ``qdd = G x + g0``.
     g0 : ndarray, shape (nv,)
@@ -122,19 +136,52 @@ def qp_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_conta
     q -= ST.T @ (torque_scale * t0)
     for i in range(n):
         P[i, i] += 1e-9
-    # C^T x >= d: lambda >= 0, low <= tau <= high
-    C = np.zeros((n, nl + 2 * nj))
+    return P, q, G, g0, T, t0
+
+
+@njit(cache=True, nogil=True)
+def bound_constraints(T, t0, low, high, nl):
+    """The QP's inequalities ``C^T x >= d``: the ``nl`` edge magnitudes (the last
+    unknowns) >= 0, ``low <= T x + t0 <= high``; ``T`` (nh, n), the rest (nh,).
+
+    Returns
+    -------
+    C : ndarray, shape (n, nl + 2 nh)
+    d : ndarray, shape (nl + 2 nh,)
+    """
+    return watched_constraints(T, t0, low, high, nl, np.ones(T.shape[0], dtype=np.bool_))
+
+
+@njit(cache=True, nogil=True)
+def watched_constraints(T, t0, low, high, nl, watched):
+    """The columns of :func:`bound_constraints` that the QP is solved with: the forces'
+    (the first ``nl``) and both torque bounds of the ``watched`` hinges (nh,), in that
+    order (upper bounds, then lower)."""
+    nh, n = T.shape
+    nj = n - nl
+    m = nl
+    for k in range(nh):
+        if watched[k]:
+            m += 2
+    C = np.zeros((n, m))
+    d = np.empty(m)
     for i in range(nl):
         C[nj + i, i] = 1.0
-    for k in range(nj):
-        for i in range(n):
-            C[i, nl + k] = -T[k, i]
-            C[i, nl + nj + k] = T[k, i]
-    d = np.empty(nl + 2 * nj)
-    d[:nl] = 0.0
-    d[nl:nl + nj] = t0 - high
-    d[nl + nj:] = low - t0
-    return P, q, C, d, G, g0, T, t0
+        d[i] = 0.0
+    col = nl
+    for side in range(2):
+        for k in range(nh):
+            if watched[k]:
+                if side == 0:
+                    for i in range(n):
+                        C[i, col] = -T[k, i]
+                    d[col] = t0[k] - high[k]
+                else:
+                    for i in range(n):
+                        C[i, col] = T[k, i]
+                    d[col] = low[k] - t0[k]
+                col += 1
+    return C, d
 
 
 @njit(cache=True, nogil=True)
@@ -158,29 +205,6 @@ def near_bounds(ctrl, actuator_of_hinge, low, high, strength, share):
         c = ctrl[actuator_of_hinge[k]]
         out[k] = c > high[k] - share * strength[k] or c < low[k] + share * strength[k]
     return out
-
-
-@njit(cache=True, nogil=True)
-def bound_columns(C, d, nl, watched):
-    """The columns of ``C`` (n, nl + 2 nh) and ``d`` that the QP is solved with: the
-    forces' (the first ``nl``) and both torque bounds of the ``watched`` hinges (nh,)."""
-    nh = watched.shape[0]
-    cols = np.empty(nl + 2 * nh, dtype=np.int64)
-    m = 0
-    for i in range(nl):
-        cols[m] = i
-        m += 1
-    for side in range(2):
-        for k in range(nh):
-            if watched[k]:
-                cols[m] = nl + side * nh + k
-                m += 1
-    Cs = np.empty((C.shape[0], m))
-    ds = np.empty(m)
-    for j in range(m):
-        Cs[:, j] = C[:, cols[j]]
-        ds[j] = d[cols[j]]
-    return Cs, ds
 
 
 @njit(cache=True, nogil=True)
@@ -275,6 +299,17 @@ def desired_acceleration(qdd_ref, kp, err, kd, qd_ref, qvel, max_acceleration, o
     for j in range(out.shape[0]):
         a = qdd_ref[j] + kp[j] * err[j] + kd[j] * (qd_ref[j] - qvel[j])
         out[j] = a if a != a else min(max(a, -max_acceleration), max_acceleration)
+
+
+@njit(cache=True, nogil=True)
+def clip_torques(tau, low, high):
+    """``tau`` (nu,) within ``[low, high]`` (nu,) each, a new array (NaN stays NaN, as
+    with ``np.clip``)."""
+    out = np.empty(tau.shape[0])
+    for j in range(tau.shape[0]):
+        t = tau[j]
+        out[j] = t if t != t else min(max(t, low[j]), high[j])
+    return out
 
 
 @njit(cache=True, nogil=True)

@@ -60,6 +60,7 @@ class FootPlacement:
     def __init__(self, model, reference_qpos, fps: float, gain: float | None = None):
         import mujoco
 
+        self._mj_subtreeVel, self._mj_jac = mujoco.mj_subtreeVel, mujoco.mj_jac
         def body(name):
             i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
             if i < 0:
@@ -170,8 +171,6 @@ class FootPlacement:
         ndarray, shape (2,)
             The horizontal shift asked of the swing foot (zero when no leg swings), m.
         """
-        import mujoco
-
         if floor_bodies is None:
             floor_bodies = floor_contacts(self.model, data)[1].tolist()
         left, right = self._touching(floor_bodies)
@@ -179,7 +178,7 @@ class FootPlacement:
             return np.zeros(2)
         swing = 0 if right else 1
         stance = 1 - swing
-        mujoco.mj_subtreeVel(self.model, data)
+        self._mj_subtreeVel(self.model, data)
         xpos = data.xpos
         # the reference's stance foot where the reference has it down, at the frame
         # nearest this one (a foot the character put down early or lifted late is
@@ -190,8 +189,8 @@ class FootPlacement:
             self.ref_ankle[self.down_frame[frame, stance], stance], self.time_constant_s,
             self.gain if gain is None else gain, MAX_SHIFT_M)
         dofs, qadr = self.hips[swing]
-        mujoco.mj_jac(self.model, data, self._jacp, None, xpos[self.ankle[swing]],
-                      int(self.ankle[swing]))
+        self._mj_jac(self.model, data, self._jacp, None, xpos[self.ankle[swing]],
+                     int(self.ankle[swing]))
         if SWING_HEIGHT:
             # and the ankle at least at the reference's height above the floor (plus a
             # clearance while the reference swings it: a toe that scrapes trips; not

@@ -21,7 +21,8 @@ subject, exactly, to
 
 The root rows are solved for the root acceleration, which leaves a quadratic programme in
 the joint accelerations and the edge magnitudes (about 45 + 4 x contacts unknowns). Its
-terms are set up in one compiled call (:func:`controller.kernels.qp_terms`).
+terms are set up in one compiled call (:func:`controller.kernels.qp_cost_terms`; the
+inequalities only where the QP is solved from scratch).
 
 From one physics step to the next the QP's active set (which edge magnitudes are 0, which
 torques are at a bound) rarely changes. So it is first solved with the last step's active
@@ -47,14 +48,14 @@ import quadprog
 
 from controller.contacts import floor_contacts
 from controller.kernels import (
-    bound_columns,
     break_bounds,
     hinges_at_bounds,
     near_bounds,
-    qp_terms,
+    qp_cost_terms,
     recall_active,
     remember_active,
     solve_active_set,
+    watched_constraints,
 )
 
 #: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
@@ -75,6 +76,7 @@ FORCE_TOLERANCE = 1e-12
 #: ... or a multiplier below minus this times 1 + the largest linear term of the QP.
 MULTIPLIER_TOLERANCE = 1e-14
 _NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
+_NO_POINTS = np.zeros((0, 3))
 
 
 @dataclass(frozen=True)
@@ -107,7 +109,10 @@ class WholeBodyID:
     """
 
     def __init__(self, model, joint_dofs, torque_range_nm, weights: Weights | None = None):
+        import mujoco
+
         self.model = model
+        self._mj_fullM, self._mj_jac = mujoco.mj_fullM, mujoco.mj_jac
         self.nv = int(model.nv)
         self.joint_dofs = np.asarray(joint_dofs, dtype=int)
         if sorted(self.joint_dofs.tolist()) != list(range(6, self.nv)):
@@ -177,35 +182,54 @@ class WholeBodyID:
         normal_n : float
             The planned total normal force, N.
         """
-        import mujoco
+        tau, x, G, g0, nc = self._plan(data, qdd_des, contact_damping, exclude, floor)
+        qdd = G @ x + g0
+        # every edge has the same normal component
+        lam = x[self.nv - 6:]
+        normal = float(np.sum(lam) * self.edges[0, 2] * self.weight_n) if nc else 0.0
+        return tau, qdd, normal
 
+    def torques(self, data, qdd_des, exclude=(), floor=None):
+        """The torques of :meth:`solve` alone (nu,), at the default contact damping."""
+        return self._plan(data, qdd_des, None, exclude, floor)[0]
+
+    def _plan(self, data, qdd_des, contact_damping, exclude, floor):
+        """:meth:`solve`'s QP: ``(tau (nu,), x (n,), G (nv, n), g0 (nv,), contacts)``."""
         if contact_damping is None:
             contact_damping = CONTACT_DAMPING
         model, nv, w = self.model, self.nv, self.w
         M = self.M
-        mujoco.mj_fullM(model, data, M)
+        self._mj_fullM(model, data, M)
         h = np.subtract(data.qfrc_bias, data.qfrc_passive)
-        pts, bodies, index = self.floor_contacts(data, exclude, floor)
+        index, bodies = floor_contacts(model, data) if floor is None else floor
+        if index.size:
+            contact = data.contact
+            pts, geoms = contact.pos[index], contact.geom[index]
+            if exclude:
+                keep = np.array([b not in exclude for b in bodies.tolist()], dtype=bool)
+                pts, bodies, geoms = pts[keep], bodies[keep], geoms[keep]
+        else:
+            pts, geoms = _NO_POINTS, _NO_GEOMS
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
+        jacp = self._jacp
         for i in range(nc):
-            mujoco.mj_jac(model, data, self._jacp, None, pts[i], int(bodies[i]))
-            Jc[3 * i:3 * i + 3] = self._jacp
+            self._mj_jac(model, data, jacp, None, pts[i], int(bodies[i]))
+            Jc[3 * i:3 * i + 3] = jacp
         nj = nv - 6
         # Without floor contact nothing but the limbs' reaction turns the root: asking for
         # a root acceleration would only fling the limbs.
         root_w = self.root_w if nc else self.root_w * w.flight_root
-        P, q, C, d, G, g0, T, t0 = qp_terms(
+        P, q, G, g0, T, t0 = qp_cost_terms(
             M, h, Jc, np.asarray(data.qvel), np.asarray(qdd_des, dtype=float), self.edges,
             self.weight_n, root_w, w.joints, w.contact, w.force, self.torque_scale,
-            float(contact_damping), self.low, self.high)
+            float(contact_damping))
         nl = P.shape[0] - nj
         # Warm start: the edges whose force was 0 at the last step (carried in the MuJoCo
         # state's userdata, so a rollout from a saved state solves as the run did) and the
         # hinges whose applied torque is at a bound are guessed to be the active set; the
         # guess is right when the KKT conditions hold (the QP's minimiser, at about a
         # quarter of the cost), else the QP is solved from scratch.
-        geoms = data.contact.geom[:data.ncon][index] if nl else _NO_GEOMS
         memory = data.userdata
         x = None
         if nl:
@@ -223,16 +247,11 @@ class WholeBodyID:
         if x is not None:
             tau_hinge = T @ x + t0
         else:
-            x, tau_hinge, fixed = self._solve_cold(data, P, q, C, d, T, t0, nl)
+            x, tau_hinge, fixed = self._solve_cold(data, P, q, T, t0, nl)
         remember_active(memory, geoms, fixed)
-        lam = x[nj:]
-        qdd = G @ x + g0
-        tau = tau_hinge[self.hinge_row]
-        # every edge has the same normal component
-        normal = float(np.sum(lam) * self.edges[0, 2] * self.weight_n) if nc else 0.0
-        return tau, qdd, normal
+        return tau_hinge[self.hinge_row], x, G, g0, nc
 
-    def _solve_cold(self, data, P, q, C, d, T, t0, nl):
+    def _solve_cold(self, data, P, q, T, t0, nl):
         """The QP from scratch: ``(x, hinge torques, which edge magnitudes are 0 (nl,))``.
 
         Most torque bounds are far from binding; the QP is solved with those of the hinges
@@ -244,12 +263,12 @@ class WholeBodyID:
         watched = near_bounds(data.ctrl, self.actuator_of_hinge, self.low, self.high,
                               self.strength, NEAR_BOUND)
         while True:
-            Cs, ds = bound_columns(C, d, nl, watched)
             try:
-                if ds.size:
+                if nl or watched.any():
+                    Cs, ds = watched_constraints(T, t0, self.low, self.high, nl, watched)
                     x, _, _, _, _, active = quadprog.solve_qp(P, q, Cs, ds, 0)
                 else:
-                    x, active = np.linalg.solve(P, q), np.zeros(0, dtype=int)
+                    x, active = np.linalg.solve(P, q), None
             except (ValueError, np.linalg.LinAlgError):
                 # numerically infeasible: least squares, forces clipped at 0
                 x = np.linalg.lstsq(P, q, rcond=None)[0]
@@ -258,6 +277,7 @@ class WholeBodyID:
             tau_hinge = T @ x + t0
             if not break_bounds(tau_hinge, self.low, self.high, self.tolerance, watched):
                 fixed = np.zeros(nl, dtype=bool)
-                active = active[(active >= 1) & (active <= nl)] - 1  # 1-based columns
-                fixed[active] = True
+                if nl:
+                    active = active[(active >= 1) & (active <= nl)] - 1  # 1-based columns
+                    fixed[active] = True
                 return x, tau_hinge, fixed

@@ -1,7 +1,8 @@
 """The balance controller's compiled per-step kernels (controller.kernels) are the numpy
 formulas they replace: the reference between frames, the targets clipped into the joint
 ranges, the desired acceleration, the capture-offset shift of the swing foot and the swing
-leg's joint change."""
+leg's joint change, the applied torques within their range and the QP's inequalities
+solved with (the watched torque bounds only)."""
 
 import math
 
@@ -11,12 +12,15 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from controller.kernels import (
+    bound_constraints,
     capture_shift,
     clip_targets,
+    clip_torques,
     damped_least_squares,
     desired_acceleration,
     move_point,
     reference_at,
+    watched_constraints,
 )
 
 _finite = st.floats(-10.0, 10.0, allow_nan=False)
@@ -95,3 +99,30 @@ def test_move_point_turns_the_chosen_joints_by_the_damped_least_squares():
                                            0.05, math.radians(45))
         move_point(jacp, dofs, move, 0.05, math.radians(45), q, qadr)
         np.testing.assert_array_equal(q, want)
+
+
+@given(arrays(float, 7, elements=st.floats(-500.0, 500.0, allow_nan=False)),
+       arrays(float, 7, elements=st.floats(-200.0, 0.0)), st.integers(0, 6))
+def test_clip_torques_is_np_clip(tau, low, nan_at):
+    high = -low
+    tau[nan_at] = np.nan  # a diverged plan stays visible
+    got = clip_torques(tau, low, high)
+    np.testing.assert_array_equal(got, np.clip(tau, low, high))
+
+
+@given(arrays(float, (4, 9), elements=_finite), arrays(float, 4, elements=_finite),
+       arrays(bool, 4), st.sampled_from([0, 4]))
+def test_watched_constraints_are_the_columns_of_the_bounds_kept(T, t0, watched, nl):
+    """The QP's inequalities are ``C^T x >= d``: ``lambda >= 0`` (the last ``nl`` unknowns)
+    and ``low <= T x + t0 <= high``; the watched subset is exactly their columns for the
+    forces and the watched hinges' two bounds, in the full matrix's order."""
+    low, high = -np.arange(1.0, 5.0), np.arange(1.0, 5.0)
+    C, d = bound_constraints(T, t0, low, high, nl)
+    x = np.linspace(-1.0, 1.0, T.shape[1])
+    tau = T @ x + t0
+    np.testing.assert_allclose(C.T @ x - d, np.concatenate(
+        [x[T.shape[1] - nl:], high - tau, tau - low]), rtol=1e-12, atol=1e-12)
+    keep = np.concatenate([np.ones(nl, bool), watched, watched])
+    Cs, ds = watched_constraints(T, t0, low, high, nl, watched)
+    np.testing.assert_array_equal(Cs, C[:, keep])
+    np.testing.assert_array_equal(ds, d[keep])
