@@ -147,14 +147,19 @@ class WholeBodyID:
         into ``data.contact``, without the contacts of the bodies in ``exclude``;
         ``floor``: the state's :func:`controller.contacts.floor_contacts` if already
         found."""
+        return self._planned(data, exclude, floor)[:3]
+
+    def _planned(self, data, exclude, floor):
+        """:meth:`floor_contacts` and their geom pairs, ``(m, 2)``."""
         index, body = floor_contacts(self.model, data) if floor is None else floor
         if not index.size:
-            return np.zeros((0, 3)), body, index
-        pts = data.contact.pos[:data.ncon][index]
+            return _NO_POINTS, body, index, _NO_GEOMS
+        contact = data.contact
+        pts, geoms = contact.pos[index], contact.geom[index]
         if exclude:
             keep = np.array([b not in exclude for b in body.tolist()], dtype=bool)
-            pts, body, index = pts[keep], body[keep], index[keep]
-        return pts, body, index
+            pts, body, index, geoms = pts[keep], body[keep], index[keep], geoms[keep]
+        return pts, body, index, geoms
 
     def solve(self, data, qdd_des, contact_damping: float | None = None, exclude=(),
               floor=None):
@@ -201,15 +206,7 @@ class WholeBodyID:
         M = self.M
         self._mj_fullM(model, data, M)
         h = np.subtract(data.qfrc_bias, data.qfrc_passive)
-        index, bodies = floor_contacts(model, data) if floor is None else floor
-        if index.size:
-            contact = data.contact
-            pts, geoms = contact.pos[index], contact.geom[index]
-            if exclude:
-                keep = np.array([b not in exclude for b in bodies.tolist()], dtype=bool)
-                pts, bodies, geoms = pts[keep], bodies[keep], geoms[keep]
-        else:
-            pts, geoms = _NO_POINTS, _NO_GEOMS
+        pts, bodies, _, geoms = self._planned(data, exclude, floor)
         nc = pts.shape[0]
         Jc = np.empty((3 * nc, nv))
         jacp = self._jacp
