@@ -475,8 +475,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     ctrl[k] = applied
                     steps += 1
             saturated[t] = (tau <= low_nm + at_bound_nm) | (tau >= high_nm - at_bound_nm)
-            bar.n = max(bar.n, t)
-            bar.refresh() if progress else None
+            if t > bar.n:  # the furthest frame reached (the search goes back); tqdm
+                bar.update(t - bar.n)  # redraws at most every 0.1 s
             if fatal(data) or not np.all(np.isfinite(data.qpos)):
                 back = search.retry(data, t, steps)
                 if back is not None:
