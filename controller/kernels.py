@@ -156,7 +156,8 @@ def bound_constraints(T, t0, low, high, nl):
 def watched_constraints(T, t0, low, high, nl, watched):
     """The columns of :func:`bound_constraints` that the QP is solved with: the forces'
     (the first ``nl``) and both torque bounds of the ``watched`` hinges (nh,), in that
-    order (upper bounds, then lower)."""
+    order (upper bounds, then lower): ``C`` (n, nl + 2 w) and ``d`` (nl + 2 w,), ``w`` the
+    number of hinges watched."""
     nh, n = T.shape
     nj = n - nl
     m = nl
