@@ -614,9 +614,8 @@ class _Control:
         self._mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
         desired_acceleration(qdd_ref, self.kp, self.err, self.kd, qd_ref, data.qvel,
                              MAX_ACCELERATION, self.qdd_des)
-        how = mode.swing_contacts_excluded
         tau = self.solver.torques(
-            data, self.qdd_des, exclude=() if how == "none" else self._excluded(how, frame),
+            data, self.qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame),
             floor=floor)
         applied = clip_torques(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied

@@ -61,6 +61,7 @@ class FootPlacement:
         import mujoco
 
         self._mj_subtreeVel, self._mj_jac = mujoco.mj_subtreeVel, mujoco.mj_jac
+
         def body(name):
             i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
             if i < 0:
