@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.dropouts import DROPOUT_JUMP_DEG, dropout_runs
+from upm.dropouts import DROPOUT_JUMP_DEG, dropout_runs, fill_runs
 
 
 def fill_dropouts(model, qpos) -> tuple[np.ndarray, int]:
@@ -37,14 +37,10 @@ def fill_dropouts(model, qpos) -> tuple[np.ndarray, int]:
     for name, address in zip(layout.names, layout.qpos_address, strict=True):
         bones.setdefault(name.split(".")[0], []).append(int(address))
     jump = np.deg2rad(DROPOUT_JUMP_DEG)
-    n = out.shape[0]
     filled = 0
     for columns in bones.values():
-        angles = out[:, columns]
-        for start, stop in dropout_runs(angles, jump):
-            before = angles[start - 1] if start > 0 else angles[stop]
-            after = angles[stop] if stop < n else angles[start - 1]
-            w = (np.arange(start, stop) - start + 1) / (stop - start + 1)
-            out[start:stop, columns] = (1 - w)[:, None] * before + w[:, None] * after
-            filled += stop - start
+        runs = dropout_runs(out[:, columns], jump)
+        if runs:
+            out[:, columns] = fill_runs(out[:, columns], runs)
+            filled += sum(stop - start for start, stop in runs)
     return out, filled

@@ -5,8 +5,10 @@ starts with its left arm at rest for 2 frames, then jumps by 76 degrees). A *dro
 is a run of frames in which every angle of a bone reads exactly zero while the bone's
 neighbouring frames are at least :data:`DROPOUT_JUMP_DEG` away from zero, no longer than
 :data:`MAX_DROPOUT_FRAMES` and not the whole motion. The controller fills them
-(:func:`controller.dropouts.fill_dropouts`); :func:`upm.perturb.offset_joint_angles`
-keeps them.
+(:func:`controller.dropouts.fill_dropouts`), and so does a transition
+(:func:`upm.transitions.transition`, :func:`fill_dropouts`): a transition into 16_15 would
+otherwise swing the arm to its rest for the window and then 76 degrees back in a frame.
+:func:`upm.perturb.offset_joint_angles` keeps them.
 """
 
 from __future__ import annotations
@@ -64,3 +66,54 @@ def dropout_mask(posture_deg) -> np.ndarray:
             mask[start:stop, first:first + 3] = True
     return mask
 
+
+
+def fill_runs(angles, runs) -> np.ndarray:
+    """``angles`` with each run's frames filled by linear interpolation between the frames
+    around it (held at the motion's ends).
+
+    Parameters
+    ----------
+    angles : ndarray, shape (T, k)
+        One bone's angles per frame.
+    runs : list of (int, int)
+        Half-open frame ranges (:func:`dropout_runs`), none the whole motion.
+
+    Returns
+    -------
+    ndarray, shape (T, k)
+        A filled copy.
+    """
+    out = np.array(angles, dtype=float)
+    n = out.shape[0]
+    for start, stop in runs:
+        before = out[start - 1] if start > 0 else out[stop]
+        after = out[stop] if stop < n else out[start - 1]
+        w = (np.arange(start, stop) - start + 1) / (stop - start + 1)
+        out[start:stop] = (1 - w)[:, None] * before + w[:, None] * after
+    return out
+
+
+def fill_dropouts(posture_deg) -> tuple[np.ndarray, int]:
+    """A 21-joint posture with its marker dropouts filled (:func:`fill_runs`).
+
+    Parameters
+    ----------
+    posture_deg : ndarray, shape (T, 63)
+        Three channels per joint (:mod:`upm.skeleton`), degrees.
+
+    Returns
+    -------
+    posture_deg : ndarray, shape (T, 63)
+        A filled copy.
+    filled : int
+        The number of (joint, frame) entries filled.
+    """
+    out = np.array(posture_deg, dtype=float)
+    filled = 0
+    for first in range(0, out.shape[1], 3):
+        runs = dropout_runs(out[:, first:first + 3])
+        if runs:
+            out[:, first:first + 3] = fill_runs(out[:, first:first + 3], runs)
+            filled += sum(stop - start for start, stop in runs)
+    return out, filled

@@ -209,7 +209,9 @@ class Transition:
         The turn about the vertical applied to clip 2 (0 if heading alignment is off).
     diagnostics : mapping of str to float
         The method's own figures plus ``root_scale`` (clip 2's root translation scale
-        when it comes from another subject) and ``resampled_from_fps`` (0 if not).
+        when it comes from another subject), ``resampled_from_fps`` (0 if not) and
+        ``dropouts_filled`` (the (joint, frame) marker dropouts of both clips filled
+        before the window was made, :func:`upm.dropouts.fill_dropouts`).
     """
 
     motion: Motion

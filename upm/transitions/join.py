@@ -6,8 +6,12 @@ comparisons between methods are about the postures. Angles: the methods work on 
 unwrapped along time (clip 2 shifted by whole turns so that B lies within 180 degrees of
 A); the window's joint angles are then wrapped to [-180, 180), like the paper's DOF
 values, so the joined motion is continuous *on the circle* (difference frames with
-``upm.angles.angle_diff_deg`` or unwrap first). Clip frames are kept as given. The root's
-Euler angles, in contrast, are written continuing from A's (numerically continuous).
+``upm.angles.angle_diff_deg`` or unwrap first). Clip frames are kept as given, but for
+marker dropouts (:mod:`upm.dropouts`: a bone read as exactly zero for a few frames), which
+are filled from the frames around them first: 16_15 starts with its left arm at rest for
+2 frames, and B taken from them would swing the arm down through the window and 76 degrees
+back up in the frame after it. The root's Euler angles, in contrast, are written
+continuing from A's (numerically continuous).
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import time
 import numpy as np
 
 from upm.angles import unwrap_deg, wrap_deg
+from upm.dropouts import fill_dropouts
 from upm.errors import UsageError
 from upm.motion import Motion
 from upm.resample import resample
@@ -107,6 +112,13 @@ def _concat_extra(parts: list[Motion | np.ndarray | None], lengths: list[int], n
                            for p, n in zip(parts, lengths, strict=True)])
 
 
+def _without_dropouts(motion: Motion) -> tuple[Motion, int]:
+    """``motion`` with its marker dropouts filled (:func:`upm.dropouts.fill_dropouts`), and
+    the number of (joint, frame) entries filled."""
+    posture, filled = fill_dropouts(motion.posture_deg)
+    return (motion.replace(posture_deg=posture) if filled else motion), filled
+
+
 def transition(method: str, before: Motion, after: Motion, frames: int = 20,
                alpha: float = 0.5, key_source=None, *, align_heading: bool = True,
                context: int = SPLINE_CONTEXT) -> Transition:
@@ -150,7 +162,10 @@ def transition(method: str, before: Motion, after: Motion, frames: int = 20,
     check_key_source(spec, key_source)
     if isinstance(context, bool) or not isinstance(context, (int, np.integer)) or context < 1:
         raise UsageError(f"context must be a whole number of frames >= 1, not {context!r}")
+    before, filled_before = _without_dropouts(before)
+    after, filled_after = _without_dropouts(after)
     after, info = match_clip(before, after)
+    info["dropouts_filled"] = float(filled_before + filled_after)
 
     start = time.perf_counter()
     # The root first: it does not depend on the window's angles, and a method may check
