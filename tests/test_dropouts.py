@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from upm.dropouts import DROPOUT_JUMP_DEG, dropout_mask, dropout_runs, fill_dropouts
+from upm.dropouts import DROPOUT_JUMP_DEG, dropout_mask, fill_dropouts, joint_runs
+from upm.skeleton import JOINTS
 from upm.transitions import transition
 
 
@@ -21,9 +22,8 @@ def test_every_clip_is_left_without_dropouts_and_changed_only_there(all_motions)
         assert count == mask.reshape(len(mask), 21, 3).any(axis=2).sum(), name
         with_dropouts += count > 0
         # each filled run lies between the frames around it (holds the one at an end)
-        for first in range(0, 63, 3):
-            channels = slice(first, first + 3)
-            for start, stop in dropout_runs(before[:, channels]):
+        for channels, runs in joint_runs(before):
+            for start, stop in runs:
                 around = before[[i for i in (start - 1, stop) if 0 <= i < len(before)],
                                 channels]
                 run = filled[start:stop, channels]
@@ -65,7 +65,7 @@ def test_a_transition_into_16_15_does_not_swing_the_arm_to_its_dropout(catalog):
     assert not dropout_mask(posture).any()
     np.testing.assert_allclose(posture[step.window.stop:],
                                fill_dropouts(after.posture_deg)[0])
-    lhumerus = slice(18, 21)
+    lhumerus = slice(3 * JOINTS.index("lhumerus"), 3 * JOINTS.index("lhumerus") + 3)
     around_end = posture[step.window.stop - 3:step.window.stop + 10, lhumerus]
     assert np.abs(np.diff(around_end, axis=0)).max() < 10.0
     # the clip as read jumps by tens of degrees from its dropout

@@ -61,11 +61,23 @@ def dropout_mask(posture_deg) -> np.ndarray:
     """
     posture = np.asarray(posture_deg, dtype=float)
     mask = np.zeros(posture.shape, dtype=bool)
-    for first in range(0, posture.shape[1], 3):
-        for start, stop in dropout_runs(posture[:, first:first + 3]):
-            mask[start:stop, first:first + 3] = True
+    for channels, runs in joint_runs(posture):
+        for start, stop in runs:
+            mask[start:stop, channels] = True
     return mask
 
+
+def joint_runs(posture_deg) -> list[tuple[slice, list[tuple[int, int]]]]:
+    """Each joint's channels in a 21-joint posture (T, 63) and its dropouts
+    (:func:`dropout_runs`), for the joints that have any."""
+    posture = np.asarray(posture_deg, dtype=float)
+    out = []
+    for first in range(0, posture.shape[1], 3):
+        channels = slice(first, first + 3)
+        runs = dropout_runs(posture[:, channels])
+        if runs:
+            out.append((channels, runs))
+    return out
 
 
 def fill_runs(angles, runs) -> np.ndarray:
@@ -95,25 +107,11 @@ def fill_runs(angles, runs) -> np.ndarray:
 
 
 def fill_dropouts(posture_deg) -> tuple[np.ndarray, int]:
-    """A 21-joint posture with its marker dropouts filled (:func:`fill_runs`).
-
-    Parameters
-    ----------
-    posture_deg : ndarray, shape (T, 63)
-        Three channels per joint (:mod:`upm.skeleton`), degrees.
-
-    Returns
-    -------
-    posture_deg : ndarray, shape (T, 63)
-        A filled copy.
-    filled : int
-        The number of (joint, frame) entries filled.
-    """
+    """A filled copy (T, 63) of a 21-joint posture's :func:`dropout_mask` values
+    (:func:`fill_runs`), and the number of (joint, frame) entries filled."""
     out = np.array(posture_deg, dtype=float)
     filled = 0
-    for first in range(0, out.shape[1], 3):
-        runs = dropout_runs(out[:, first:first + 3])
-        if runs:
-            out[:, first:first + 3] = fill_runs(out[:, first:first + 3], runs)
-            filled += sum(stop - start for start, stop in runs)
+    for channels, runs in joint_runs(out):
+        out[:, channels] = fill_runs(out[:, channels], runs)
+        filled += sum(stop - start for start, stop in runs)
     return out, filled
