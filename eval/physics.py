@@ -211,16 +211,20 @@ def run_unit(unit: Unit) -> dict[str, float]:
 
 
 class Checkpoint:
-    """Finished units, one JSON line each, in ``DIR/physics-partial.jsonl``.
+    """Finished units, one JSON line each, in ``DIR/physics-partial.jsonl`` (or ``name``).
 
     The first line states the settings the figures depend on; a file with other settings
-    is not reused (it is replaced when the run starts).
+    is not reused (it is replaced when the run starts). With ``numbers`` (the default) a
+    unit's figures are read back as floats (NaN for null); else as they were written
+    (``eval.robustness``: booleans and nulls kept).
     """
 
-    def __init__(self, out_dir, settings: dict):
-        self.path = Path(out_dir) / CHECKPOINT_NAME
-        self.settings = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION,
-                         **settings}
+    def __init__(self, out_dir, settings: dict, *, name: str = CHECKPOINT_NAME,
+                 format_name: str = CHECKPOINT_FORMAT, version: int = CHECKPOINT_VERSION,
+                 numbers: bool = True):
+        self.path = Path(out_dir) / name
+        self.settings = {"format": format_name, "version": version, **settings}
+        self.numbers = numbers
         self.done: dict[str, dict[str, float]] = {}
         self._handle = None
 
@@ -234,8 +238,12 @@ class Checkpoint:
                 return 0
             for line in lines[1:]:
                 entry = json.loads(line)
-                self.done[entry["key"]] = {k: (math.nan if v is None else float(v))
-                                           for k, v in entry["metrics"].items()}
+                metrics = entry["metrics"]
+                if not isinstance(metrics, dict):
+                    raise TypeError("metrics")
+                self.done[entry["key"]] = (
+                    {k: (math.nan if v is None else float(v)) for k, v in metrics.items()}
+                    if self.numbers else metrics)
         except (ValueError, KeyError, TypeError, AttributeError):
             # A line cut short by a crash: keep what was read before it.
             pass
@@ -268,7 +276,8 @@ class Checkpoint:
 
 
 def _line(key: str, metrics: dict[str, float]) -> str:
-    clean = {k: (None if not math.isfinite(v) else v) for k, v in metrics.items()}
+    clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+             for k, v in metrics.items()}
     return json.dumps({"key": key, "metrics": clean}) + "\n"
 
 

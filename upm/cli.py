@@ -33,6 +33,7 @@ COMMANDS: dict[str, str] = {
     "check": "upm.commands.check",
     "simulate": "upm.commands.simulate",
     "eval": "upm.commands.eval",
+    "robustness": "upm.commands.robustness",
     "studio": "upm.commands.studio",
 }
 

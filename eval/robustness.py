@@ -1,0 +1,403 @@
+"""How often does the free-root character stay up? The balance controller's robustness.
+
+A free-root run is one path of a chaotic system: whether the character falls can turn on
+differences far under mocap's precision, so one run per clip says little. Here every
+*row* (a clip, or clips joined by a transition method) is run on its exact reference
+(offset seed 0) and on references whose joint channels are each moved by their own
+constant drawn from N(0, ``offset_deg``) (:func:`upm.perturb.offset_joint_angles`, seeds
+1 to K), each by the balance controller (:func:`controller.balance.follow`: root free, no
+external force) from start to end. The figures per run are those of ``upm simulate
+--modes free`` (:class:`controller.balance_report.BalanceTracking`); per row, how many runs
+fall and when, the others' errors, and the cost.
+
+A unit of work is one (row, seed) (:class:`Unit`), run in a worker of :mod:`eval.executor`
+(a local pool or Ray) on one process of the controller (the same run as on two: the
+controller's rollouts give the same frames either way). Finished units are appended to a
+checkpoint in the output directory, so a stopped run resumes where it was.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from upm.errors import UsageError
+
+CHECKPOINT_NAME = "robustness-partial.jsonl"
+CHECKPOINT_FORMAT = "upm-controller/robustness-checkpoint"
+CHECKPOINT_VERSION = 1
+#: The default standard deviation of the per-channel offsets, degrees.
+OFFSET_DEG = 0.1
+#: The default number of offset seeds (besides the exact reference).
+OFFSET_SEEDS = 5
+
+
+class Row(NamedTuple):
+    """A clip or a sequence of clips, joined by ``method`` windows.
+
+    Attributes
+    ----------
+    pieces : tuple of str
+        ``CLIP`` or ``CLIP@A:B`` each.
+    method : str
+        The transition method between pieces (unused for one piece).
+    """
+
+    pieces: tuple[str, ...]
+    method: str = "upm"
+
+    @property
+    def text(self) -> str:
+        """The row as written on the command line (``A+B+C,method``)."""
+        joined = "+".join(self.pieces)
+        return joined if len(self.pieces) == 1 else f"{joined},{self.method}"
+
+    @property
+    def label(self) -> str:
+        """The row as the tables name it."""
+        joined = " -> ".join(self.pieces)
+        return joined if len(self.pieces) == 1 else f"{joined} ({self.method})"
+
+
+_WALK_SEQUENCE = ("02_01", "02_02", "02_01", "02_02")
+#: The rows of issue 10's table: the flat-floor walks and runs of the data, and 8-12 s
+#: sequences of them joined by the project's transitions.
+DEFAULT_ROWS = (
+    Row(("02_01",)), Row(("02_02",)), Row(("35_01",)), Row(("02_03",)), Row(("05_01",)),
+    Row(("16_15",)), Row(("09_06",)),
+    Row(_WALK_SEQUENCE, "upm"), Row(("16_15",) * 2, "upm"), Row(("16_15",) * 3, "upm"),
+    Row(_WALK_SEQUENCE, "feasible"),
+)
+
+
+def parse_row(text: str) -> Row:
+    """``"02_01"``, ``"02_01@0:240"`` or ``"02_01+02_02,upm"`` -> :class:`Row`.
+
+    Pieces are joined by ``+``; a sequence may end in ``,METHOD`` (default ``upm``).
+
+    Raises
+    ------
+    upm.errors.UsageError
+        Naming the row, for an empty piece, an unknown method, or a malformed clip.
+    """
+    from upm.catalog import parse_clip_ref
+    from upm.transitions import get_method
+
+    body, _, method = text.strip().partition(",")
+    method = method.strip() or "upm"
+    pieces = tuple(p.strip() for p in body.split("+"))
+    if not body or any(not p for p in pieces):
+        raise UsageError(f"row {text!r}: write CLIP, CLIP@A:B or CLIP+CLIP+...[,METHOD]")
+    try:
+        for piece in pieces:
+            parse_clip_ref(piece)
+        get_method(method)
+    except UsageError as exc:
+        raise UsageError(f"row {text!r}: {exc}") from None
+    return Row(pieces, method)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What every run of a robustness study shares (the figures depend on these)."""
+
+    data_dir: str
+    map_path: str | None
+    offset_deg: float
+    search_budget: float | None
+
+    def as_dict(self) -> dict:
+        import hashlib
+        from pathlib import Path
+
+        the_map = "trained (train split)"
+        if self.map_path:
+            digest = hashlib.sha256(Path(self.map_path).read_bytes()).hexdigest()[:16]
+            the_map = f"{Path(self.map_path).name} (sha256 {digest})"
+        return {"data": Path(self.data_dir).name, "map": the_map,
+                "offset_deg": self.offset_deg, "search_budget": self.search_budget}
+
+
+class Unit(NamedTuple):
+    """One run: a row on its exact reference (seed 0) or moved by offset seed ``seed``."""
+
+    row: Row
+    seed: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.row.text}#{self.seed}"
+
+
+def task_list(rows, seeds: int) -> list[Unit]:
+    """Every run: each row at seed 0 and offset seeds 1 to ``seeds``, row by row."""
+    return [Unit(row, seed) for row in rows for seed in range(seeds + 1)]
+
+
+#: Figures of one run (of :meth:`controller.balance_report.BalanceTracking.run_summary`).
+RUN_FIELDS = ("fell", "fall_time_s", "ends_in_trouble", "error_deg_rms",
+              "body_error_mm_mean", "root_drift_m", "heading_error_deg_peak",
+              "search_retries", "wall_s_per_sim_s", "raw_steps_per_step")
+
+_WORKER: dict = {}
+
+
+def reference(settings: Settings, row: Row, seed: int):
+    """The row's motion (offset by ``seed`` unless it is 0) and the humanoid of its first
+    piece's subject: ``(model, motion)``. Sequences are cached per worker."""
+    from humanoid_xml.models import catalog_model_path, load_model
+    from upm.catalog import Catalog, parse_clip_ref
+    from upm.perturb import offset_joint_angles
+    from upm.transitions import build_sequence
+    from upm.transitions.registry import KeySourceContext, build_key_source, get_method
+
+    if _WORKER.get("settings") != settings:
+        _WORKER.clear()
+        _WORKER.update(settings=settings, catalog=Catalog(settings.data_dir), sequences={},
+                       sources={}, models={})
+    catalog = _WORKER["catalog"]
+    if row not in _WORKER["sequences"]:
+        refs = [parse_clip_ref(p) for p in row.pieces]
+        pieces = [catalog.load_ref(ref) for ref in refs]
+        source = None
+        if len(pieces) > 1:
+            if row.method not in _WORKER["sources"]:
+                context = KeySourceContext(catalog=catalog, map_path=settings.map_path,
+                                           train_maps=True)
+                _WORKER["sources"][row.method] = build_key_source(get_method(row.method),
+                                                                  context)
+            source = _WORKER["sources"][row.method]
+        sequence = build_sequence(pieces, row.method, key_source=source)
+        path = catalog_model_path(catalog, refs[0].name)
+        if path not in _WORKER["models"]:
+            _WORKER["models"][path] = load_model(path)
+        _WORKER["sequences"][row] = (_WORKER["models"][path], sequence.motion)
+    model, motion = _WORKER["sequences"][row]
+    if seed:
+        motion = offset_joint_angles(motion, settings.offset_deg, seed)
+    return model, motion
+
+
+def run_unit(settings: Settings, unit: Unit) -> dict:
+    """One run (in a worker): the figures of :data:`RUN_FIELDS`, plus ``seconds`` (the
+    motion's length) and ``wall_s``."""
+    from controller.analysis import free_run
+    from controller.qpos import to_qpos
+    from eval.study import single_threaded_blas
+
+    single_threaded_blas()
+    model, motion = reference(settings, unit.row, unit.seed)
+    tracking = free_run(model, to_qpos(model, motion), motion.fps,
+                        search_budget=settings.search_budget, processes=1)
+    summary = tracking.run_summary()
+    out = {k: summary[k] for k in RUN_FIELDS}
+    out["seconds"] = round(motion.n_frames / motion.fps, 4)
+    out["wall_s"] = round(tracking.run.wall_s, 3)
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in out.items()}
+
+
+@dataclass
+class RobustnessResult:
+    """A robustness study.
+
+    Attributes
+    ----------
+    settings : Settings
+    rows : list of Row
+    seeds : int
+        Offset seeds per row (besides seed 0).
+    runs : dict of str to dict
+        Every unit's figures by :attr:`Unit.key`.
+    resumed : int
+        Runs taken from an earlier run's checkpoint.
+    workers : int
+    executor : str
+    wall_s : float
+        Wall time of the runs made now.
+    """
+
+    settings: Settings
+    rows: list
+    seeds: int
+    runs: dict
+    resumed: int
+    workers: int
+    executor: str
+    wall_s: float
+
+    def run(self, row: Row, seed: int) -> dict:
+        return self.runs[Unit(row, seed).key]
+
+
+def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: str = "local",
+                   address: str | None = None, workers: int | None = None,
+                   show_progress: bool = True) -> RobustnessResult:
+    """Run every row at seed 0 and offset seeds 1 to ``seeds``.
+
+    Raises
+    ------
+    eval.physics.StudyIncomplete
+        If runs failed: each named with its error; the finished ones stay in the
+        checkpoint and the same command completes the rest.
+    """
+    import time
+
+    from eval.executor import make_executor
+    from eval.physics import Checkpoint, StudyIncomplete
+    from eval.study import default_workers
+    from upm.progress import progress
+
+    units = task_list(rows, seeds)
+    checkpoint = Checkpoint(out_dir, settings.as_dict(), name=CHECKPOINT_NAME,
+                            format_name=CHECKPOINT_FORMAT, version=CHECKPOINT_VERSION,
+                            numbers=False)
+    resumed = checkpoint.load()
+    todo = [u for u in units if u.key not in checkpoint.done]
+    workers = max(1, min(workers or default_workers(), max(1, len(todo))))
+    runner = make_executor(executor, workers, address)
+    failures = []
+    start = time.perf_counter()
+    checkpoint.open()
+    bar = progress(total=len(todo), desc="free-root runs", unit="run",
+                   disable=None if show_progress else True)
+    by_key = {u.key: u for u in todo}
+    try:
+        for outcome in runner.run(run_unit, [(u.key, (settings, u)) for u in todo]):
+            if outcome.ok:
+                checkpoint.add(outcome.key, outcome.value)
+            else:
+                failures.append((by_key[outcome.key], outcome.error))
+            bar.update()
+    finally:
+        bar.close()
+        checkpoint.close()
+    if failures:
+        first, error = failures[0]
+        raise StudyIncomplete(
+            f"{len(failures)} of {len(units)} free-root runs failed (first: {first.key}: "
+            f"{error}); the {len(checkpoint.done)} finished are kept in {checkpoint.path}: "
+            "run the same command again to complete the rest")
+    return RobustnessResult(settings=settings, rows=list(rows), seeds=seeds,
+                            runs={u.key: checkpoint.done[u.key] for u in units},
+                            resumed=resumed, workers=workers, executor=executor,
+                            wall_s=time.perf_counter() - start)
+
+
+def row_summary(result: RobustnessResult, row: Row) -> dict:
+    """One row's figures: seed 0's run, the offset runs' falls and when, the standing
+    runs' error ranges and the cost."""
+    exact = result.run(row, 0)
+    offsets = [result.run(row, s) for s in range(1, result.seeds + 1)]
+    runs = [exact, *offsets]
+    up = [r for r in runs if not r["fell"]]
+
+    def span(values):
+        values = [v for v in values if v is not None]
+        return [min(values), max(values)] if values else None
+
+    return {
+        "row": row.text, "label": row.label, "seconds": exact["seconds"],
+        "exact": exact,
+        "offset_falls": sum(bool(r["fell"]) for r in offsets),
+        "offset_runs": len(offsets),
+        "offset_fall_times_s": sorted(r["fall_time_s"] for r in offsets if r["fell"]),
+        "falls": sum(bool(r["fell"]) for r in runs), "runs": len(runs),
+        "ends_going_down": sum(bool(r["ends_in_trouble"]) for r in up),
+        "standing_error_deg_rms": span(r["error_deg_rms"] for r in up),
+        "standing_body_error_mm_mean": span(r["body_error_mm_mean"] for r in up),
+        "wall_s_per_sim_s": span(r["wall_s_per_sim_s"] for r in runs),
+        "raw_steps_per_step": span(r["raw_steps_per_step"] for r in runs),
+    }
+
+
+def summary(result: RobustnessResult) -> dict:
+    """The study as JSON: settings, per-row figures, totals and every run."""
+    from controller.report import software_versions
+
+    rows = [row_summary(result, row) for row in result.rows]
+    return {
+        "format": "upm-controller/robustness", "version": 1,
+        "settings": {**result.settings.as_dict(), "offset_seeds": result.seeds},
+        "software": software_versions(),
+        "totals": {"falls": sum(r["falls"] for r in rows),
+                   "runs": sum(r["runs"] for r in rows),
+                   "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
+                   "offset_falls": sum(r["offset_falls"] for r in rows),
+                   "offset_runs": sum(r["offset_runs"] for r in rows)},
+        "rows": rows,
+        "runs": result.runs,
+    }
+
+
+def _fmt_span(span, digits: int) -> str:
+    if span is None:
+        return "-"
+    lo, hi = span
+    return f"{lo:.{digits}f}" if round(lo, digits) == round(hi, digits) else \
+        f"{lo:.{digits}f}-{hi:.{digits}f}"
+
+
+def table_markdown(report: dict) -> str:
+    """The per-row table (markdown)."""
+    s = report["settings"]
+    k = s["offset_seeds"]
+    lines = [
+        f"| row | s | exact reference (seed 0) | falls of {k} offset runs, when (s) | "
+        "the standing runs' error (deg / mm) | ends going down | wall s per simulated s |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in report["rows"]:
+        e = r["exact"]
+        exact = (f"falls at {e['fall_time_s']:.2f} s" if e["fell"] else
+                 f"stands, {e['error_deg_rms']:.1f} / {e['body_error_mm_mean']:.0f}")
+        when = ", ".join(f"{t:.2f}" for t in r["offset_fall_times_s"])
+        error = (f"{_fmt_span(r['standing_error_deg_rms'], 1)} / "
+                 f"{_fmt_span(r['standing_body_error_mm_mean'], 0)}"
+                 if r["standing_error_deg_rms"] else "-")
+        lines.append(f"| {r['label']} | {r['seconds']:.1f} | {exact} | "
+                     f"{r['offset_falls']}" + (f" ({when})" if when else "") + f" | {error} | "
+                     f"{r['ends_going_down']} of {r['runs'] - r['falls']} | "
+                     f"{_fmt_span(r['wall_s_per_sim_s'], 2)} |")
+    t = report["totals"]
+    lines.append("")
+    lines.append(f"Falls: {t['falls']} of {t['runs']} runs ({t['exact_falls']} of "
+                 f"{len(report['rows'])} on the exact references, {t['offset_falls']} of "
+                 f"{t['offset_runs']} on references moved by N(0, {s['offset_deg']:g} deg) "
+                 "per joint channel).")
+    return "\n".join(lines) + "\n"
+
+
+def plot(report: dict, path) -> None:
+    """Each row's length and its falls: seed 0 (a diamond) and the offset seeds (dots)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from upm.fileio import atomic_path
+
+    rows = report["rows"]
+    fig, ax = plt.subplots(figsize=(8, 0.45 * len(rows) + 1.2))
+    for y, r in enumerate(rows):
+        ax.plot([0, r["seconds"]], [y, y], color="0.8", lw=6, solid_capstyle="butt")
+        times = r["offset_fall_times_s"]
+        ax.plot(times, [y] * len(times), "o", color="tab:red", ms=5, alpha=0.7)
+        if r["exact"]["fell"]:
+            ax.plot([r["exact"]["fall_time_s"]], [y], "D", color="black", ms=6)
+        ax.text(r["seconds"] + 0.1, y, f"{r['falls']}/{r['runs']}", va="center", fontsize=8)
+    ax.plot([], [], "o", color="tab:red", ms=5, label="fall, offset reference")
+    ax.plot([], [], "D", color="black", ms=6, label="fall, exact reference")
+    ax.set_yticks(range(len(rows)), [r["label"] for r in rows], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("time of the fall in the run, s (grey: the row's length; right: falls "
+                  "of runs)")
+    ax.set_title(f"Free-root balance controller: falls per row (exact reference and "
+                 f"{report['settings']['offset_seeds']} offset seeds, "
+                 f"N(0, {report['settings']['offset_deg']:g} deg))", fontsize=9)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)

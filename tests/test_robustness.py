@@ -1,0 +1,113 @@
+"""upm robustness: the balance controller on exact and offset references (real clips)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from eval.robustness import CHECKPOINT_NAME, Row, Settings, parse_row, run_robustness
+from upm.cli import main
+from upm.errors import UsageError
+
+
+@pytest.mark.parametrize("text, row", [
+    ("02_01", Row(("02_01",), "upm")),
+    (" 02_01@0:240 ", Row(("02_01@0:240",), "upm")),
+    ("02_01+02_02", Row(("02_01", "02_02"), "upm")),
+    ("02_01@10:+16_15@:-5,feasible", Row(("02_01@10:", "16_15@:-5"), "feasible")),
+])
+def test_rows_parse(text, row):
+    parsed = parse_row(text)
+    assert parsed == row
+    assert parse_row(parsed.text) == parsed
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", "write CLIP"), ("02_01+", "write CLIP"), ("+02_01", "write CLIP"),
+    ("02_01+02_02,nosuch", "nosuch"), ("02_01@x", "bad clip reference"),
+])
+def test_bad_rows_name_the_row(text, message):
+    with pytest.raises(UsageError, match=message) as caught:
+        parse_row(text)
+    assert repr(text) in str(caught.value)
+
+
+def test_each_row_runs_on_its_exact_and_offset_references(data_dir, tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows", "02_01@0:120",
+                 "02_01@0:60+02_02@0:60,linear", "--seeds", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    report = json.loads((out / "robustness.json").read_text())
+    assert report["settings"]["offset_seeds"] == 1 and report["settings"]["offset_deg"] == 0.1
+    assert report["totals"]["runs"] == 4 and len(report["runs"]) == 4
+    walk, sequence = report["rows"]
+    assert walk["label"] == "02_01@0:120" and walk["seconds"] == pytest.approx(1.0)
+    assert sequence["label"] == "02_01@0:60 -> 02_02@0:60 (linear)"
+    # the first second of a walk: the controller stands, on the clip and on its offset
+    exact, offset = report["runs"]["02_01@0:120#0"], report["runs"]["02_01@0:120#1"]
+    assert not exact["fell"] and not offset["fell"] and walk["falls"] == 0
+    assert 0 < exact["error_deg_rms"] < 5 and 0 < exact["body_error_mm_mean"] < 50
+    # 0.1 degree offsets are a different reference: a different run
+    assert exact["error_deg_rms"] != offset["error_deg_rms"]
+    assert walk["standing_error_deg_rms"] == [
+        min(exact["error_deg_rms"], offset["error_deg_rms"]),
+        max(exact["error_deg_rms"], offset["error_deg_rms"])]
+    assert (out / "robustness.md").read_text() in printed
+    assert (out / "robustness.png").stat().st_size > 1000
+    assert not (out / CHECKPOINT_NAME).exists()
+
+
+def test_a_run_is_upm_simulate_on_the_same_offset_reference(data_dir, tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows", "02_01@0:90", "--seeds",
+                 "1", "--workers", "1", "--no-figures", "--out", str(out)]) == 0
+    run = json.loads((out / "robustness.json").read_text())["runs"]["02_01@0:90#1"]
+    assert main(["simulate", "--data", str(data_dir), "--sequence", "02_01@0:90",
+                 "--method", "linear", "--modes", "free", "--no-window-runs",
+                 "--processes", "1",
+                 "--offset-deg", "0.1", "--offset-seed", "1",
+                 "--report", str(tmp_path / "s.json")]) == 0
+    capsys.readouterr()
+    free = json.loads((tmp_path / "s.json").read_text())["totals"]["tracking"]["free"]
+    for key in ("fell", "error_deg_rms", "body_error_mm_mean", "root_drift_m",
+                "search_retries"):
+        assert run[key] == free[key], key
+
+
+def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
+    from eval.physics import Checkpoint
+
+    settings = Settings(str(data_dir), None, 0.1, None)
+    row = Row(("02_01@0:60",))
+    earlier = Checkpoint(tmp_path, settings.as_dict(), name=CHECKPOINT_NAME,
+                         format_name="upm-controller/robustness-checkpoint", version=1,
+                         numbers=False)
+    earlier.open()
+    kept = {"fell": False, "fall_time_s": None, "seconds": 0.5, "marker": 1}
+    earlier.add(f"{row.text}#0", kept)
+    earlier.close()
+    result = run_robustness(settings, [row], 1, tmp_path, workers=1, show_progress=False)
+    assert result.resumed == 1
+    assert result.run(row, 0) == kept  # read back, not run again
+    assert result.run(row, 1)["seconds"] == pytest.approx(0.5)
+    assert "marker" not in result.run(row, 1)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--rows", "02_01+"], "write CLIP"),
+    (["--rows", "99_99"], "no clip '99_99'"),
+    (["--rows", "02_01@5"], "one frame"),
+    (["--rows", "02_01", "02_01"], "repeated"),
+    (["--offset-deg", "0"], "--offset-deg"),
+    (["--seeds", "-1"], "--seeds"),
+])
+def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
+    result = subprocess.run([sys.executable, "-m", "upm", "robustness", "--data",
+                             str(data_dir), "--out", str(tmp_path / "r"), *args],
+                            capture_output=True, text=True)
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert not (tmp_path / "r").exists()

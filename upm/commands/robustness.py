@@ -1,0 +1,141 @@
+"""How often does the free-root character stay up? Each row (a clip, or clips joined by
+transitions) is followed by the balance controller, root free and no external force, on
+its exact reference and on --seeds references whose joint channels are each moved by their
+own constant drawn from N(0, --offset-deg) (0.1 deg: far under mocap's precision). One
+free-root run is one path of a chaotic system; this says how often an outcome holds.
+
+A row is CLIP, CLIP@A:B, or pieces joined by '+' with an optional ',METHOD' (default upm):
+02_01+02_02+02_01+02_02,feasible. The default rows are the flat-floor walks and runs of the
+data and the 8-12 s sequences of issue 10's table (11 rows; with the default 5 seeds, 66
+runs: about half an hour on 2 cores). Sequences joined by upm or feasible use --map, else
+a UPM trained on the train split of clips.csv (cached outside the repository).
+
+Per run the figures of 'upm simulate --modes free' (fell and when, ends going down, joint
+and body error, drift, heading, search retries, wall s per simulated s and raw mj_steps per
+step); per row, how many runs fell and when. Written to --out: robustness.json (settings,
+software versions, per row, every run), robustness.md (the table) and robustness.png (the
+falls on each row's timeline). Finished runs are kept in robustness-partial.jsonl as they
+come: the same command, stopped or failed, completes only what is missing.
+
+Examples:
+  upm robustness --out upm-robustness
+  upm robustness --rows 05_01 16_15+16_15 --seeds 10 --out r
+  upm robustness --rows 02_01@0:240 --seeds 2 --workers 1 --out quick
+"""
+
+from __future__ import annotations
+
+HELP = "how often the free-root character stays up: clips and sequences on offset references"
+
+DEFAULT_OUT = "upm-robustness"
+
+
+def configure(parser) -> None:
+    from eval.robustness import OFFSET_DEG, OFFSET_SEEDS
+    from upm.commands.common import add_data_argument
+
+    add_data_argument(parser)
+    parser.add_argument("--rows", nargs="+", metavar="ROW", default=None,
+                        help="clips or sequences (CLIP, CLIP@A:B, CLIP+CLIP+...[,METHOD]); "
+                             "default: issue 10's 11 rows")
+    parser.add_argument("--seeds", type=int, metavar="K", default=OFFSET_SEEDS,
+                        help="offset references per row, seeds 1 to K, besides the exact one "
+                             f"(default {OFFSET_SEEDS}; 0: the exact references only)")
+    parser.add_argument("--offset-deg", metavar="SIGMA", type=float, default=OFFSET_DEG,
+                        help="standard deviation of each joint channel's constant offset, "
+                             f"degrees (default {OFFSET_DEG:g})")
+    parser.add_argument("--map", metavar="MAP.npz", default=None,
+                        help="UPM for the rows joined by upm or feasible (default: trained on "
+                             "the train split, cached)")
+    parser.add_argument("--search-budget", metavar="X", type=float, default=None,
+                        help="the balance controller's search budget, in multiples of the "
+                             "run's own physics steps (default: the controller's, 15)")
+    parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
+                        help=f"output directory (default: ./{DEFAULT_OUT})")
+    parser.add_argument("--workers", type=int, metavar="K", default=None,
+                        help="runs at once (default: the usable cores). The figures do not "
+                             "depend on it")
+    parser.add_argument("--executor", choices=("local", "ray"), default="local",
+                        help="where the runs go: a local process pool (default) or Ray")
+    parser.add_argument("--address", metavar="ADDR", default=None,
+                        help="an existing Ray cluster (with --executor ray)")
+    parser.add_argument("--no-figures", dest="figures", action="store_false",
+                        help="skip robustness.png")
+
+
+def run(args) -> int:
+    import json
+    import math
+    import sys
+    from pathlib import Path
+
+    from eval.robustness import (
+        CHECKPOINT_NAME,
+        DEFAULT_ROWS,
+        Settings,
+        parse_row,
+        plot,
+        run_robustness,
+        summary,
+        table_markdown,
+    )
+    from upm.catalog import Catalog
+    from upm.errors import UsageError
+    from upm.fileio import atomic_path
+
+    rows = [parse_row(text) for text in args.rows] if args.rows else list(DEFAULT_ROWS)
+    if len(set(rows)) != len(rows):
+        raise UsageError("--rows: a row is repeated")
+    if not 0 <= args.seeds <= 1000:
+        raise UsageError(f"--seeds must be from 0 to 1000, not {args.seeds}")
+    if not (math.isfinite(args.offset_deg) and 0 < args.offset_deg <= 10):
+        raise UsageError(f"--offset-deg {args.offset_deg:g}: use a number of degrees above 0 "
+                         "and at most 10")
+    if args.search_budget is not None and not (math.isfinite(args.search_budget)
+                                               and 0 <= args.search_budget <= 1000):
+        raise UsageError(f"--search-budget {args.search_budget:g}: use a number from 0 to "
+                         "1000")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be at least 1, not {args.workers}")
+    if args.address and args.executor != "ray":
+        raise UsageError("--address goes with --executor ray")
+    if args.map is not None and not Path(args.map).is_file():
+        raise UsageError(f"--map {args.map}: no such file")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out}: exists and is not a directory")
+    if args.executor == "ray":
+        from eval.executor import import_ray
+
+        import_ray()
+    catalog = Catalog(args.data)
+    for piece in sorted({p for row in rows for p in row.pieces}):
+        if catalog.load_ref(piece).n_frames < 2:  # a one-line error for a bad clip or range
+            raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
+    settings = Settings(data_dir=str(catalog.root), map_path=args.map,
+                        offset_deg=float(args.offset_deg), search_budget=args.search_budget)
+    print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
+          f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
+    from eval.executor import executor_session
+    from eval.study import default_workers
+
+    with executor_session(args.executor, args.workers or default_workers(), args.address):
+        result = run_robustness(settings, rows, args.seeds, out, executor=args.executor,
+                                address=args.address, workers=args.workers)
+    report = summary(result)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_path(out / "robustness.json") as tmp:
+        Path(tmp).write_text(json.dumps(report, indent=1, allow_nan=False) + "\n",
+                             encoding="utf-8")
+    table = table_markdown(report)
+    with atomic_path(out / "robustness.md") as tmp:
+        Path(tmp).write_text(table, encoding="utf-8")
+    if args.figures:
+        plot(report, out / "robustness.png")
+    (out / CHECKPOINT_NAME).unlink(missing_ok=True)
+    print(table, end="")
+    print(f"({result.workers} {result.executor} workers, {result.wall_s:.0f} s"
+          + (f", {result.resumed} runs resumed" if result.resumed else "") + ")")
+    print(f"written to {out}/: robustness.json, robustness.md"
+          + (", robustness.png" if args.figures else ""))
+    return 0
