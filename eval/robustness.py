@@ -383,7 +383,7 @@ def plot(report: dict, path) -> None:
     from upm.fileio import atomic_path
 
     rows = report["rows"]
-    fig, ax = plt.subplots(figsize=(8, 0.4 * len(rows) + 1.8))
+    fig, ax = plt.subplots(figsize=(8, 0.4 * len(rows) + 1.4))
     for y, r in enumerate(rows):
         ax.plot([0, r["seconds"]], [y, y], color="0.8", lw=6, solid_capstyle="butt")
         times = r["offset_fall_times_s"]
@@ -401,9 +401,8 @@ def plot(report: dict, path) -> None:
     ax.set_title(f"Falls of the free-root character: exact reference and "
                  f"{report['settings']['offset_seeds']} offset ones, "
                  f"N(0, {report['settings']['offset_deg']:g} deg)", fontsize=9)
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=2,
-              frameon=False)
-    fig.tight_layout()
+    fig.legend(fontsize=8, loc="lower center", ncol=2, frameon=False)
+    fig.tight_layout(rect=(0, 0.25 / fig.get_figheight(), 1, 1))
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)
     plt.close(fig)
