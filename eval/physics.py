@@ -275,6 +275,35 @@ class Checkpoint:
         self.path.unlink(missing_ok=True)
 
 
+def run_checkpointed(runner, fn, tasks: list, checkpoint: Checkpoint, desc: str,
+                     show_progress: bool = True) -> list[tuple[str, str]]:
+    """Run ``tasks`` (``(key, args)`` each) on an :mod:`eval.executor` executor, adding
+    each finished one to the checkpoint as it comes, with a progress bar.
+
+    Returns
+    -------
+    list of (str, str)
+        The key and error of every task that failed (the others are in the checkpoint).
+    """
+    from upm.progress import progress
+
+    failures = []
+    checkpoint.open()
+    bar = progress(total=len(tasks), desc=desc, unit="run",
+                   disable=None if show_progress else True)
+    try:
+        for outcome in runner.run(fn, tasks):
+            if outcome.ok:
+                checkpoint.add(outcome.key, outcome.value)
+            else:
+                failures.append((outcome.key, outcome.error))
+            bar.update()
+    finally:
+        bar.close()
+        checkpoint.close()
+    return failures
+
+
 def _line(key: str, metrics: dict[str, float]) -> str:
     clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
              for k, v in metrics.items()}
@@ -393,7 +422,6 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     from eval.executor import make_executor
     from eval.pairs import draw_real_windows
     from eval.study import default_workers, pair_by_id
-    from upm.progress import progress
 
     config = result.config
     data = result.data
@@ -412,22 +440,11 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     _WORKER.update(config=config, data=data, pairs=pairs, real_windows=real_windows)
     runner = make_executor(executor, workers, address, init_worker,
                            (config, pairs, real_windows))
-    failures = []
     start = time.perf_counter()
-    checkpoint.open()
-    bar = progress(total=len(todo), desc="free-root test", unit="run",
-                   disable=None if show_progress else True)
     by_key = {u.key: u for u in todo}
-    try:
-        for outcome in runner.run(run_unit, [(u.key, (u,)) for u in todo]):
-            if outcome.ok:
-                checkpoint.add(outcome.key, outcome.value)
-            else:
-                failures.append((by_key[outcome.key], outcome.error))
-            bar.update()
-    finally:
-        bar.close()
-        checkpoint.close()
+    failures = [(by_key[key], error) for key, error in run_checkpointed(
+        runner, run_unit, [(u.key, (u,)) for u in todo], checkpoint, "free-root test",
+        show_progress)]
     wall = time.perf_counter() - start
     if failures:
         first, error = failures[0]

@@ -248,9 +248,8 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
     import time
 
     from eval.executor import make_executor
-    from eval.physics import Checkpoint, StudyIncomplete
+    from eval.physics import Checkpoint, StudyIncomplete, run_checkpointed
     from eval.study import default_workers
-    from upm.progress import progress
 
     units = task_list(rows, seeds)
     checkpoint = Checkpoint(out_dir, settings.as_dict(), name=CHECKPOINT_NAME,
@@ -260,26 +259,13 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
     todo = [u for u in units if u.key not in checkpoint.done]
     workers = max(1, min(workers or default_workers(), max(1, len(todo))))
     runner = make_executor(executor, workers, address)
-    failures = []
     start = time.perf_counter()
-    checkpoint.open()
-    bar = progress(total=len(todo), desc="free-root runs", unit="run",
-                   disable=None if show_progress else True)
-    by_key = {u.key: u for u in todo}
-    try:
-        for outcome in runner.run(run_unit, [(u.key, (settings, u)) for u in todo]):
-            if outcome.ok:
-                checkpoint.add(outcome.key, outcome.value)
-            else:
-                failures.append((by_key[outcome.key], outcome.error))
-            bar.update()
-    finally:
-        bar.close()
-        checkpoint.close()
+    failures = run_checkpointed(runner, run_unit, [(u.key, (settings, u)) for u in todo],
+                                checkpoint, "free-root runs", show_progress)
     if failures:
         first, error = failures[0]
         raise StudyIncomplete(
-            f"{len(failures)} of {len(units)} free-root runs failed (first: {first.key}: "
+            f"{len(failures)} of {len(units)} free-root runs failed (first: {first}: "
             f"{error}); the {len(checkpoint.done)} finished are kept in {checkpoint.path}: "
             "run the same command again to complete the rest")
     return RobustnessResult(settings=settings, rows=list(rows), seeds=seeds,
