@@ -103,7 +103,20 @@ def parse_row(text: str) -> Row:
 
 @dataclass(frozen=True)
 class Settings:
-    """What every run of a robustness study shares (the figures depend on these)."""
+    """What every run of a robustness study shares (the figures depend on these).
+
+    Attributes
+    ----------
+    data_dir : str
+        The CMU clips (``--data``).
+    map_path : str or None
+        The UPM for rows joined by ``upm`` or ``feasible``; None: trained on the train split
+        (cached).
+    offset_deg : float
+        Standard deviation of each joint channel's offset, degrees.
+    search_budget : float or None
+        The balance controller's search budget (None: its default).
+    """
 
     data_dir: str
     map_path: str | None
