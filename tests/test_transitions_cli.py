@@ -78,6 +78,7 @@ def run(*args):
     (["transition", "--from", "02_01", "--to", "02_03", "--method", "linear", "--plot",
       "f.png", "--plot-dof", "knee.rx", "--out", "x.amc"], "not a posture DOF"),
     (["sequence", "02_01@0:100", "--method", "linear", "--out", "x.amc"], "at least two"),
+    (["sequence", "02_01@0:100", "--out", "x.amc"], "at least two"),
     (["sequence", "02_01@0:100", "02_03@50:10", "--method", "linear", "--out", "x.amc"],
      "empty range"),
 ])

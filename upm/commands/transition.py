@@ -51,15 +51,25 @@ def sequence_from_args(args, pieces_text: list[str]):
     refs : list of upm.catalog.ClipRef
     sequence : upm.transitions.Sequence
     """
+    import warnings
+
     from upm.catalog import Catalog, parse_clip_ref
     from upm.progress import progress
     from upm.transitions import build_sequence
     from upm.transitions.load import key_source_for
+    from upm.transitions.registry import get_method
 
     catalog = Catalog(args.data)
     refs = [parse_clip_ref(text) for text in pieces_text]
     pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
-    key_source = key_source_for(args.method, args.map, catalog)
+    if len(refs) > 1:
+        key_source = key_source_for(args.method, args.map, catalog)
+    else:
+        # one piece has no transition: --method and --map play no part
+        key_source = None
+        get_method(args.method)
+        if args.map is not None:
+            warnings.warn("--map is not used: one piece has no transition", stacklevel=2)
     sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
                               fps=args.fps, align_heading=args.align_heading)
     return catalog, refs, sequence
