@@ -84,6 +84,7 @@ from typing import NamedTuple
 import numpy as np
 
 from controller.contacts import floor_contacts
+from controller.foot_tilt import SwingFootTilt
 from controller.kernels import (
     clip_targets,
     clip_torques,
@@ -149,6 +150,8 @@ SEARCH_BUDGET = 15.0
 MIN_TOE_PITCH_RATE = 0.2
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
+#: Keep a foot in the air at the reference's tilt (:mod:`controller.foot_tilt`).
+SWING_FOOT_TILT = True
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "heading_error_deg_peak",
@@ -571,6 +574,8 @@ class _Control:
         self.qdd_ref = np.empty(sim.nv)
         self.qdd_des = np.empty(sim.nv)
         self.err = np.zeros(sim.nv)
+        self.foot_tilt = (SwingFootTilt(sim, smooth, placement.ankle) if SWING_FOOT_TILT
+                          else None)
         self.toes = {b for b in range(sim.nbody)
                      if "toes" in (mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_BODY, b) or "")}
         # (body, hinge, its qpos address, capsule) of each toe with one hinge
@@ -608,6 +613,8 @@ class _Control:
             gain = mode.placement_gain if gain is None else gain
             self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m,
                                   floor_bodies)
+        if self.foot_tilt is not None:
+            self.foot_tilt.adjust(data, frame, q_ref, self.placement.touching(floor_bodies))
         self._flatten_toes(data, q_ref, floor_bodies)
         # targets inside the joint ranges: the limits' forces are not in the plan
         clip_targets(q_ref, qd_ref, qdd_ref, self.hinge_q, self.hinge_v, self.low, self.high)

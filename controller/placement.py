@@ -136,7 +136,7 @@ class FootPlacement:
                 out |= self.foot_bodies[side]
         return out
 
-    def _touching(self, floor_bodies) -> tuple[bool, bool]:
+    def touching(self, floor_bodies) -> tuple[bool, bool]:
         """Whether each foot (left, right) touches the floor, given the bodies of the
         state's floor contacts (:func:`controller.contacts.floor_contacts`)."""
         out = [False, False]
@@ -174,7 +174,7 @@ class FootPlacement:
         """
         if floor_bodies is None:
             floor_bodies = floor_contacts(self.model, data)[1].tolist()
-        left, right = self._touching(floor_bodies)
+        left, right = self.touching(floor_bodies)
         if left == right:
             return np.zeros(2)
         swing = 0 if right else 1

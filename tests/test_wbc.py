@@ -116,7 +116,7 @@ def test_floor_contact_scan_is_the_floor_pairs(states):
         np.testing.assert_array_equal(index, want)
         np.testing.assert_array_equal(body, pairs[want].max(axis=1))
         placement = FootPlacement(model, np.array([data.qpos, data.qpos]), 120.0)
-        touching = placement._touching(body.tolist())
+        touching = placement.touching(body.tolist())
         for side, name in enumerate(("lfoot", "rfoot")):
             foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
             on = any(_descends(model, int(b), foot) for b in body)
