@@ -11,8 +11,10 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
    accelerations from central differences (:func:`controller.dynamics.finite_differences`);
 2. moves the swing foot (:mod:`controller.placement`): by the swing hip, towards where
    the capture offset says it should land, and, by hip and knee, no lower than the
-   reference's swing ankle (a swing foot that scrapes the floor is lifted); lets a toe
-   pressed on the floor lie flat (:meth:`_Control._flatten_toes`); then keeps every hinge
+   reference's swing ankle (a swing foot that scrapes the floor is lifted); turns a foot
+   in the air by its ankle to the reference's tilt (:mod:`controller.foot_tilt`: the hip
+   and knee changes would tilt the sole with them); lets a toe pressed on the floor lie
+   flat (:meth:`_Control._flatten_toes`); then keeps every hinge
    target 2 degrees inside its joint's range (the limits' forces are not in the plan);
 3. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` (clipped to
    :data:`MAX_ACCELERATION`) with ``e`` the difference between the target and the state
