@@ -65,7 +65,7 @@ class SwingFootTilt:
             mujoco.mj_kinematics(model, data)
             # row 2 of the body's rotation: the world z axis in the body's frame
             self.up[t] = data.xmat[self.foot_bodies].reshape(-1, 3, 3)[:, 2, :]
-        self._z = np.array([0.0, 0.0, 1.0])
+        self._damping = [DAMPING * np.eye(len(h)) for h in self.hinges]
 
     def adjust(self, data, frame: int, q_ref, touching) -> None:
         """Set the ankle targets of every foot in the air in ``q_ref`` (in place).
@@ -85,9 +85,8 @@ class SwingFootTilt:
             if touching[side]:
                 continue
             now = data.xmat[foot].reshape(3, 3) @ self.up[frame, side]
-            turn = np.cross(now, self._z)
+            turn = np.array((now[1], -now[0], 0.0))  # now x z
             axes = data.xaxis[self.hinges[side]].T  # (3, k)
-            k = axes.shape[1]
-            delta = np.linalg.solve(axes.T @ axes + DAMPING * np.eye(k), axes.T @ turn)
+            delta = np.linalg.solve(axes.T @ axes + self._damping[side], axes.T @ turn)
             qadr = self.qpos_address[side]
             q_ref[qadr] = data.qpos[qadr] + delta
