@@ -8,7 +8,8 @@ reference's, a hip extended lands it on its toes. Here, while a foot is in the a
 ankle's targets become the angles that turn the foot to the reference's tilt at the
 frame: the foot lands as the reference lands it, heel or forefoot first, flat where the
 reference is flat. Only the tilt is asked for, not the heading (the character's heading
-drifts from the reference's: :mod:`controller.placement`).
+drifts from the reference's: :mod:`controller.placement`); the CMU ankle has a flexion
+hinge and a near-vertical one, so the pitch is put back and the roll only in part.
 
 The tilt is compared through the reference's vertical as the foot's own frame sees it:
 ``up`` (per frame, from the reference's forward kinematics). In the character that
@@ -22,8 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Damping of the ankle's least-squares turn (per radian squared): an ankle whose hinges
-#: cannot tilt the foot about some axis is not asked for a huge turn about it.
+#: Damping of the ankle's least-squares turn (per radian squared): it keeps the solve
+#: regular where the hinge axes line up, and is small, so that the CMU ankle's second
+#: hinge, near vertical, still turns the foot about the shank by a few degrees where the
+#: roll asks for it (that hinge has little roll to give: the roll is put back in part).
 DAMPING = 1e-3
 
 
