@@ -65,7 +65,7 @@ def sequence_from_args(args, pieces_text: list[str]):
     if len(refs) > 1:
         key_source = key_source_for(args.method, args.map, catalog)
     else:
-        # one piece has no transition: --method and --map play no part
+        # one piece has no transition: --method is only checked, --map is not read
         key_source = None
         get_method(args.method)
         if args.map is not None:
