@@ -138,11 +138,13 @@ SEGMENT_S = 0.25
 #: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
 #: far from vertical, or the head this far below the reference's: bent over at the waist
 #: with the pelvis still up) is run again in the next mode, then its predecessors, up to
-#: this many segments back ...
+#: this many segments back (4 s: on the sequences the trouble comes a second or more after
+#: the transition window that set it up; 1.5 s reached too few of the choices before it,
+#: and 10 s made the same runs as 4 s) ...
 TROUBLE_DROP_M = 0.12
 TROUBLE_UP = 0.8
 TROUBLE_HEAD_DROP_M = 0.25
-MAX_BACKTRACK = 6
+MAX_BACKTRACK = 16
 #: ... and the segments after a changed one keep its mode for this long ...
 STICKY_S = 2.0
 #: ... within this many times the reference's physics steps in all.

@@ -114,6 +114,24 @@ def test_search_gives_up_out_of_reach_or_budget(search):
     assert s.modes().tolist() == [0] * len(s.modes())
 
 
+def test_search_goes_back_as_far_as_its_reach(search):
+    """With every mode tried in the segments in reach but the furthest, the search goes
+    back to that one, MAX_BACKTRACK segments before the trouble; with it spent too,
+    nothing is left in reach and the run goes on as it is."""
+    s, data, every = search
+    last, reach = len(balance.MODES) - 1, balance.MAX_BACKTRACK
+    i = reach + 2  # the segment in trouble
+    t = i * every + 5
+    assert t < s.n_frames
+    _run_to(s, data, t)
+    s.choice = {j: last for j in range(i - reach + 1, i + 1)}
+    assert s.retry(data, t, steps=0) == (i - reach) * every + 1
+    assert s.mode((i - reach) * every + 1) == 1
+    _run_to(s, data, t)
+    s.choice = {j: last for j in range(i - reach, i + 1)}
+    assert s.retry(data, t, steps=0) is None
+
+
 def test_02_01_grounded(model02, walk):
     """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
     it; grounded, they touch it (within the low-pass's smoothing)."""
