@@ -138,9 +138,8 @@ SEGMENT_S = 0.25
 #: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
 #: far from vertical, or the head this far below the reference's: bent over at the waist
 #: with the pelvis still up) is run again in the next mode, then its predecessors, up to
-#: this many segments back (4 s: on the sequences the trouble comes a second or more after
-#: the transition window that set it up; 1.5 s reached too few of the choices before it,
-#: and 10 s made the same runs as 4 s) ...
+#: this many segments back (4 s: on 16_15 -> 16_15 the attempt that stands differs from
+#: the one that falls in a segment 3.5 s before the trouble; 10 s made the same runs) ...
 TROUBLE_DROP_M = 0.12
 TROUBLE_UP = 0.8
 TROUBLE_HEAD_DROP_M = 0.25
