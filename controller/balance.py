@@ -146,8 +146,11 @@ TROUBLE_HEAD_DROP_M = 0.25
 MAX_BACKTRACK = 16
 #: ... and the segments after a changed one keep its mode for this long ...
 STICKY_S = 2.0
-#: ... within this many times the reference's physics steps in all.
-SEARCH_BUDGET = 15.0
+#: ... within this many times the reference's physics steps in all (30, not 15: on issue
+#: 10's rows every exact reference stands, the 02 walk sequence with `upm` windows too,
+#: which falls at 15 with the budget spent; offset seeds 11-20, not looked at when 30 was
+#: chosen, fall 11 times in 110 against 25; only runs that spend more than 15 cost more).
+SEARCH_BUDGET = 30.0
 #: A toe hinge that turns the toe's axis up or down slower than this (per radian, near a
 #: vertical hinge) is not flattened.
 MIN_TOE_PITCH_RATE = 0.2

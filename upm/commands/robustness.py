@@ -48,9 +48,12 @@ def configure(parser) -> None:
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="UPM for the rows joined by upm or feasible (default: trained on "
                              "the train split, cached)")
+    from controller.balance import SEARCH_BUDGET
+
     parser.add_argument("--search-budget", metavar="X", type=float, default=None,
                         help="the balance controller's search budget, in multiples of the "
-                             "run's own physics steps (default: the controller's, 15)")
+                             "run's own physics steps (default: the controller's, "
+                             f"{SEARCH_BUDGET:g})")
     parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
                         help=f"output directory (default: ./{DEFAULT_OUT})")
     parser.add_argument("--workers", type=int, metavar="K", default=None,
