@@ -262,4 +262,6 @@ class Studio:
         with self._curve_ready:
             self._stopped = True
             self._curve_ready.notify_all()
+            # an image under way is written to the page: it ends before the server goes
+            self._curve_ready.wait_for(lambda: not self._drawing, timeout=10.0)
         self.server.stop()

@@ -253,3 +253,22 @@ def test_fig13_image_is_drawn_from_the_latest_move(session, tmp_path):
     dof_curve_png(scene.result, session.transition("linear"), tmp_path / "c.png", dof)
     expected = (matplotlib.image.imread(tmp_path / "c.png")[..., :3] * 255).round()
     np.testing.assert_array_equal(shown, expected.astype(np.uint8))
+
+
+def test_stopping_while_the_image_is_drawn_writes_nothing_to_a_closed_page(session):
+    """stop() waits for a Fig. 13 image under way: it would otherwise be written to the
+    page after the server has gone (viser warns of a message queued on a closed
+    connection)."""
+    import time
+    import warnings
+
+    from studio.app import Studio
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        studio = Studio(session, port=_free_port())
+        studio.set(alpha=0.3)  # queues an image; its drawing takes about 0.1 s
+        time.sleep(0.02)
+        studio.stop()
+        time.sleep(0.5)  # a drawing stop() did not wait for ends here
+    assert not [w for w in caught if "closed connection" in str(w.message)]
