@@ -129,7 +129,54 @@ def test_search_goes_back_as_far_as_its_reach(search):
     assert s.mode((i - reach) * every + 1) == 1
     _run_to(s, data, t)
     s.choice = {j: last for j in range(i - reach, i + 1)}
+    s.trouble = None  # a trouble of its own, with no sweep to end
     assert s.retry(data, t, steps=0) is None
+
+
+def test_search_sweeps_back_one_segment_at_a_time(search):
+    """For one trouble the search changes one segment at a time: when segment 2 has run
+    in every mode, segment 1 takes the next ones with segment 2 back on the mode it had
+    (inherited), not every combination of the two."""
+    s, data, every = search
+    modes = len(balance.MODES)
+    t = 2 * every + 5
+    _run_to(s, data, t)
+    for _ in range(1, modes):
+        assert s.retry(data, t, steps=0) == 2 * every + 1
+        _run_to(s, data, t)
+    for mode in range(1, modes):
+        assert s.retry(data, t, steps=0) == every + 1
+        assert s.mode(every + 1) == mode and s.mode(t) == mode  # segment 2 inherits it
+        _run_to(s, data, t)
+    # an attempt that gets into trouble further on (past segment 1's sticky mode) is a
+    # new trouble: searched from there
+    i = 2 + s.sticky
+    later = i * every + 5
+    _run_to(s, data, later)
+    assert s.retry(data, later, steps=0) == i * every + 1
+    assert s.mode(later) == 1 and s.mode(every + 1) == modes - 1
+
+
+def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
+    """With the sweep through every segment in reach spent, the search runs the choices
+    before it again, from the first segment they differ in, and then backtracks through
+    the combinations, nearest segment first."""
+    monkeypatch.setattr(balance, "MAX_BACKTRACK", 1)
+    s, data, every = search
+    modes = len(balance.MODES)
+    t = 2 * every + 5
+    _run_to(s, data, t)
+    for _ in range(2 * (modes - 1)):  # segment 2's modes, then segment 1's
+        assert s.retry(data, t, steps=0) is not None
+        _run_to(s, data, t)
+    assert s.mode(every + 1) == modes - 1
+    # the sweep is spent: segment 1 back in the default mode, run from its start
+    assert s.retry(data, t, steps=0) == every + 1
+    assert s.mode(every + 1) == 0 and s.mode(t) == 0
+    _run_to(s, data, t)
+    # the same trouble again: now every combination, segment 2's modes first
+    assert s.retry(data, t, steps=0) == 2 * every + 1
+    assert s.mode(every + 1) == 0 and s.mode(t) == 1
 
 
 def test_02_01_grounded(model02, walk):
