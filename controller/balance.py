@@ -149,7 +149,8 @@ STICKY_S = 2.0
 #: ... within this many times the reference's physics steps in all (30, not 15: on issue
 #: 10's rows every exact reference stands, the 02 walk sequence with `upm` windows too,
 #: which falls at 15 with the budget spent; offset seeds 11-20, not looked at when 30 was
-#: chosen, fall 11 times in 110 against 25; only runs that spend more than 15 cost more).
+#: chosen, fall 11 times in 110 against 25, with the search before its sweep; only runs
+#: that spend more than 15 cost more).
 SEARCH_BUDGET = 30.0
 #: A toe hinge that turns the toe's axis up or down slower than this (per radian, near a
 #: vertical hinge) is not flattened.
