@@ -119,6 +119,38 @@ class Mode(NamedTuple):
     swing_clearance_m: float
 
 
+class SearchTrouble(NamedTuple):
+    """One trouble the search worked on (:class:`_Search`): where the character first got
+    into it, why, what the search spent on it, and how it ended.
+
+    Attributes
+    ----------
+    frame : int
+        The frame the first attempt got into trouble at.
+    time_s : float
+        Its time from the run's start.
+    cause : tuple of str
+        What the search's test found there (:func:`trouble_rule`): any of ``"pelvis
+        low"``, ``"head low"``, ``"tilted"``, or ``"simulation failed"``.
+    retries : int
+        Segments the search ran again for it (the replay of its best attempt included).
+    rerun_s : float
+        Simulated seconds those retries ran again (from each restart to the frame the
+        attempt before it got into trouble at).
+    outcome : str
+        ``"got past"`` (an attempt went on beyond the segment in trouble), ``"budget
+        spent"`` or ``"no mode within reach"`` (the search gave up and the run went on
+        from the attempt that got furthest).
+    """
+
+    frame: int
+    time_s: float
+    cause: tuple
+    retries: int
+    rerun_s: float
+    outcome: str
+
+
 #: The controller's modes, tried in this order where the default leads to trouble: the
 #: foot-placement gain, which floor contacts of the foot the reference has in the air are
 #: not planned as support ("none"; "swing toes": a swing toe that scrapes the floor is not
@@ -230,6 +262,8 @@ class BalanceRun:
         again (all but the last step of each frame taken: that one is taken again to
         restore the frame). The physics steps simulated in all are ``simulated_steps -
         reused_steps + lookahead_steps``.
+    troubles : tuple of SearchTrouble
+        Every trouble the search worked on, in the order it met them.
     """
 
     fps: float
@@ -266,6 +300,7 @@ class BalanceRun:
     simulated_steps: int
     lookahead_steps: int = 0
     reused_steps: int = 0
+    troubles: tuple = ()
 
     @property
     def steps(self) -> int:
@@ -488,7 +523,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             if t > bar.n:  # the furthest frame reached (the search goes back); tqdm
                 bar.update(t - bar.n)  # redraws at most every 0.1 s
             if fatal(data) or not np.all(np.isfinite(data.qpos)):
-                back = search.retry(data, t, steps)
+                back = search.retry(data, t, steps, failed=True)
                 if back is not None:
                     t, fall, stop_frame = back, None, n_frames
                     if selector is not None:
@@ -552,7 +587,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         sim_s=ctrl_steps * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
         segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
         lookahead_steps=selector.lookahead.steps if selector is not None else 0,
-        reused_steps=reused,
+        reused_steps=reused, troubles=search.troubles(),
     )
 
 
@@ -786,6 +821,8 @@ class _Search:
         self.restart = 1
         self.best: tuple[int, dict] | None = None
         self.trouble: _Trouble | None = None
+        self.fps = float(fps)
+        self._records: list[dict] = []  # SearchTrouble's fields, the last one open
 
     def _segment(self, t: int) -> int:
         return (t - 1) // self.every
@@ -829,13 +866,25 @@ class _Search:
 
     def troubled(self, data, t: int) -> bool:
         """Whether the character is in trouble at frame ``t`` (quiet or not)."""
+        return bool(self.causes(data, t))
+
+    def causes(self, data, t: int) -> tuple:
+        """What puts the character in trouble at frame ``t``: any of ``"pelvis low"``,
+        ``"head low"``, ``"tilted"`` (empty: not in trouble)."""
         low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
         bent = self.ref_head[t] - data.site_xpos[self.head_site, 2] > TROUBLE_HEAD_DROP_M
-        return bool(low or bent or data.xmat[self.pelvis_body, 8] < TROUBLE_UP)
+        tilted = data.xmat[self.pelvis_body, 8] < TROUBLE_UP
+        return tuple(name for name, on in (("pelvis low", low), ("head low", bent),
+                                           ("tilted", tilted)) if on)
 
-    def retry(self, data, t: int, steps: int) -> int | None:
+    def troubles(self) -> tuple:
+        """Every trouble the search worked on, :class:`SearchTrouble` each (the last one
+        got past if the search did not give up on it)."""
+        return tuple(SearchTrouble(**{"outcome": "got past", **r}) for r in self._records)
+
+    def retry(self, data, t: int, steps: int, failed: bool = False) -> int | None:
         """Restore the state for the next attempt; returns the frame to run from, or
-        None (go on as it is).
+        None (go on as it is). ``failed``: the simulation failed at frame ``t``.
 
         When the budget is spent or no mode is left within reach, the attempt that got
         furthest before its trouble is run again, if it is not this one, and the search
@@ -845,6 +894,12 @@ class _Search:
             self.best = (t, dict(self.choice))
         spent = steps >= self.budget_steps
         i = self._segment(t)
+        if self.trouble is None or i > self.trouble.segment:
+            if self._records and "outcome" not in self._records[-1]:
+                self._records[-1]["outcome"] = "got past"
+            cause = ("simulation failed",) if failed else self.causes(data, t)
+            self._records.append(dict(frame=int(t), time_s=t / self.fps, cause=cause,
+                                      retries=0, rerun_s=0.0))
         if not spent and (self.trouble is None or i > self.trouble.segment):
             self.trouble = _Trouble(i, i, dict(self.choice))
         back = self._back(t)
@@ -854,7 +909,7 @@ class _Search:
             before = self.trouble.choice_before
             differ = [j for j in range(i + 1) if self._mode_of(j) != self._mode_of(j, before)]
             if differ and differ[0] in self.saved:
-                return self._restart(data, differ[0], before)
+                return self._restart(data, differ[0], before, t)
             back = self._back(t)
         if spent or back is None:
             return self._give_up(data, t, spent)
@@ -862,7 +917,7 @@ class _Search:
             self.trouble.changed = back
         choice = dict(self.choice)
         choice[back] = self._mode_of(back) + 1
-        return self._restart(data, back, {j: m for j, m in choice.items() if j <= back})
+        return self._restart(data, back, {j: m for j, m in choice.items() if j <= back}, t)
 
     def _back(self, t: int) -> int | None:
         """The segment a retry at frame ``t`` goes back to (in its next mode), or None
@@ -891,6 +946,7 @@ class _Search:
         best_t, best_choice = self.best
         self.best = None
         self.trouble = None
+        self._records[-1]["outcome"] = "budget spent" if spent else "no mode within reach"
         self.quiet_until = self.n_frames if spent else max(t, best_t) + self.every
         if best_t <= t:
             return None
@@ -899,11 +955,16 @@ class _Search:
         first = differ[0] if differ else self._segment(t)
         if first not in self.saved:
             return None
-        return self._restart(data, first, best_choice, quiet=self.quiet_until)
+        return self._restart(data, first, best_choice, t, quiet=self.quiet_until)
 
-    def _restart(self, data, segment: int, choice: dict, quiet: int = 0) -> int:
+    def _restart(self, data, segment: int, choice: dict, t: int, quiet: int = 0) -> int:
+        """Run again from ``segment``'s saved start with ``choice``, the attempt before
+        having got to frame ``t``; returns the frame to run from."""
         import mujoco
 
+        record = self._records[-1]
+        record["retries"] += 1
+        record["rerun_s"] += (t - segment * self.every) / self.fps
         self.choice = choice
         for j in [j for j in self.saved if j > segment]:
             del self.saved[j]

@@ -133,6 +133,10 @@ class BalanceTracking:
             "lookahead_steps": run.lookahead_steps,
             "reused_steps": run.reused_steps,
             "segment_modes": run.segment_modes.tolist(),
+            "search_troubles": [
+                {"frame": r.frame, "time_s": round(r.time_s, 5), "cause": list(r.cause),
+                 "retries": r.retries, "rerun_s": round(r.rerun_s, 5), "outcome": r.outcome}
+                for r in run.troubles],
             **self.summary(),
         }
 

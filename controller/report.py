@@ -28,7 +28,10 @@ find it missing), ``com_height_error_m``, ``contact_force_peak_bw``/``_mean_bw``
 ``ends_in_trouble`` (the time the character went on in trouble, by the search's test in the run's
 ``trouble_rule``, and whether the part's last frame before any fall is in trouble: going
 down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`` and
-``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents).
+``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents). The whole
+run's figures (``totals.tracking.free``) also list ``search_troubles`` (added within
+version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "retries",
+"rerun_s", "outcome"}`` (:class:`controller.balance.SearchTrouble`).
 
 ``software`` names the versions the figures were computed with: a free-root run is
 deterministic on one installation, but its search takes discrete decisions, so another

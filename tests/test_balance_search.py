@@ -114,6 +114,40 @@ def test_search_gives_up_out_of_reach_or_budget(search):
     assert s.modes().tolist() == [0] * len(s.modes())
 
 
+def test_search_records_each_trouble_and_how_it_ended(search):
+    """Each trouble the search works on is recorded where the character first got into it,
+    with its cause, the retries and the simulated time they ran again, and its outcome: got
+    past (an attempt went on beyond its segment) or given up (budget spent)."""
+    s, data, every = search
+    sim = s.sim
+    data.qpos[:] = sim.qpos0
+    data.qpos[2] = 1.0
+    mujoco.mj_kinematics(sim, data)
+    s.ref_pelvis[:] = data.xpos[s.pelvis_body, 2] + 0.2  # the pelvis 20 cm low everywhere
+    s.ref_head[:] = data.site_xpos[s.head_site, 2]
+    t = 2 * every + 5
+    _run_to(s, data, t)
+    assert s.retry(data, t, steps=0) == 2 * every + 1
+    _run_to(s, data, t - 2)  # the next attempt gets into trouble sooner
+    assert s.retry(data, t - 2, steps=0) == 2 * every + 1
+    (first,) = s.troubles()
+    assert first._replace(rerun_s=0.0) == balance.SearchTrouble(
+        frame=t, time_s=t / 120.0, cause=("pelvis low",), retries=2, rerun_s=0.0,
+        outcome="got past")  # open: so far
+    assert first.rerun_s == pytest.approx((5 + 3) / 120.0)
+    later = 4 * every + 7  # an attempt got past segment 2, into trouble in segment 4
+    _run_to(s, data, later)
+    assert s.retry(data, later, steps=0, failed=True) == 4 * every + 1
+    _run_to(s, data, later - 3)  # sooner again, with the budget spent: the best again
+    assert s.retry(data, later - 3, steps=int(s.budget_steps)) == 4 * every + 1
+    first, second = s.troubles()
+    assert first.outcome == "got past" and first.retries == 2
+    assert second.frame == later and second.cause == ("simulation failed",)
+    assert second.outcome == "budget spent" and second.retries == 2
+    assert second.rerun_s == pytest.approx((7 + 4) / 120.0)
+    assert sum(r.retries for r in s.troubles()) == s.retries
+
+
 def test_search_goes_back_as_far_as_its_reach(search):
     """With every mode tried in the segments in reach but the furthest, the search goes
     back to that one, MAX_BACKTRACK segments before the trouble; with it spent too,
@@ -223,6 +257,9 @@ def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk,
     qpos = to_qpos(model02, walk)[:75]
     run = balance.follow(model02, qpos, walk.fps)
     assert run.retries > 0
+    assert sum(r.retries for r in run.troubles) == run.retries
+    assert {r.outcome for r in run.troubles} <= {"budget spent", "no mode within reach"}
+    assert all(r.cause == ("pelvis low",) for r in run.troubles)
     assert run.simulated_steps > run.steps
     assert run.segment_modes.max() > 0
     again = balance.replay(model02, run)

@@ -141,13 +141,17 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert free["controller"] == "balance"
     assert ("free root (balance): " + (f"falls at {free['fall_time_s']:.2f} s" if free["fell"]
                                         else "does not fall")) in printed
-    # it walks through the window and the second walk (measured: no fall, 13.2 deg RMS in
-    # the window, where the linear blend slides the feet and the search ran segments in other
-    # modes; without the search it fell at 1.4 s, 0.5 s into 02_02; the servos alone fall
-    # within 1.4 s)
+    # it walks through the window and the second walk (measured: no fall, 9.8 deg RMS in
+    # the window, where the linear blend slides the feet, with no search; the servos alone
+    # fall within 1.4 s)
     (window,) = report["windows"]
     assert not free["fell"]
     assert not window["tracking"]["free"]["fell"]
+    # where the search worked, and what it spent there
+    troubles = free["search_troubles"]
+    assert sum(r["retries"] for r in troubles) == free["search_retries"]
+    assert {r["outcome"] for r in troubles} <= {"got past"}
+    assert ("search: " in printed) == bool(troubles)
     assert window["tracking"]["free"]["error_deg_rms"] < 15.0
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
     assert 0 <= free["heading_error_deg_peak"] <= 180
@@ -221,3 +225,16 @@ def test_search_budget_and_offsets_are_recorded_and_checked(tmp_path, data_dir, 
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1
         assert not (tmp_path / "x.json").exists()
+
+
+def test_the_search_is_summed_up_in_one_line():
+    from upm.commands.simulate import _search_line
+
+    troubles = [
+        {"frame": 94, "time_s": 0.78333, "cause": ["pelvis low"], "retries": 96,
+         "rerun_s": 19.175, "outcome": "got past"},
+        {"frame": 129, "time_s": 1.075, "cause": ["pelvis low", "tilted"], "retries": 51,
+         "rerun_s": 15.95833, "outcome": "budget spent"}]
+    assert _search_line(troubles) == (
+        "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
+        "again; got past 1; gave up at 1.07 s (pelvis low and tilted: budget spent)")

@@ -252,6 +252,22 @@ def _write_control(run, path):
     return path
 
 
+def _search_line(troubles: list) -> str:
+    """The balance controller's search in one line: its troubles, what it spent, and
+    where it gave up (and why)."""
+    given_up = [r for r in troubles if r["outcome"] != "got past"]
+    line = (f"  search: {len(troubles)} trouble{'' if len(troubles) == 1 else 's'} "
+            f"(first at {troubles[0]['time_s']:.2f} s), "
+            f"{sum(r['retries'] for r in troubles)} retries running "
+            f"{sum(r['rerun_s'] for r in troubles):.1f} simulated s again; got past "
+            f"{len(troubles) - len(given_up)}")
+    if given_up:
+        line += "; gave up at " + ", ".join(
+            f"{r['time_s']:.2f} s ({' and '.join(r['cause'])}: {r['outcome']})"
+            for r in given_up)
+    return line
+
+
 def _print_summary(report: dict, json_path, csv_path) -> None:
     m = report["motion"]
     seq = report["sequence"]
@@ -291,4 +307,6 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
                      f"{free['heading_error_deg_peak']:.0f} deg, "
                      f"{free['wall_s_per_sim_s']:.2f} wall s per simulated s")
         print(line)
+        if free.get("search_troubles"):
+            print(_search_line(free["search_troubles"]))
     print(f"report: {json_path} (summary {csv_path})")
