@@ -264,6 +264,11 @@ class BalanceRun:
         reused_steps + lookahead_steps``.
     troubles : tuple of SearchTrouble
         Every trouble the search worked on, in the order it met them.
+    actuator_names : tuple of str
+        The actuators (the columns of ``torque_nm`` and ``torque_saturated``).
+    torque_range_nm : ndarray, shape (nu, 2)
+        Each actuator's strength: the least and the largest torque it can apply, N m (a
+        joint is stronger one way than the other).
     """
 
     fps: float
@@ -301,6 +306,8 @@ class BalanceRun:
     lookahead_steps: int = 0
     reused_steps: int = 0
     troubles: tuple = ()
+    actuator_names: tuple = ()
+    torque_range_nm: np.ndarray | None = None
 
     @property
     def steps(self) -> int:
@@ -588,6 +595,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
         lookahead_steps=selector.lookahead.steps if selector is not None else 0,
         reused_steps=reused, troubles=search.troubles(),
+        actuator_names=tuple(mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
+                             for i in range(nu)),
+        torque_range_nm=torque_range,
     )
 
 

@@ -106,8 +106,25 @@ class BalanceTracking:
             "wall_s_per_sim_s": w["wall_s_per_sim_s"],
             "raw_steps_per_step": run.raw_steps_per_step,
         }
-        return {k: (round(v, 5) if isinstance(v, float) and math.isfinite(v) else v)
-                for k, v in out.items()}
+        out = {k: (round(v, 5) if isinstance(v, float) and math.isfinite(v) else v)
+               for k, v in out.items()}
+        out["torque_by_actuator"] = self._by_actuator(up)
+        return out
+
+    def _by_actuator(self, up) -> dict:
+        """Each actuator's torque over frames ``up``: its peak and mean magnitude, its
+        range (its strength either way), and the share of the frames it was at either end
+        (JSON-ready; empty for a run without actuator names)."""
+        run = self.run
+        if not run.actuator_names or not up.size:
+            return {}
+        torque = np.abs(run.torque_nm[up])
+        peak, mean = torque.max(axis=0), torque.mean(axis=0)
+        share = run.torque_saturated[up].mean(axis=0)
+        return {name: {"peak_nm": round(float(peak[i]), 3), "mean_nm": round(float(mean[i]), 3),
+                       "range_nm": [round(float(x), 3) for x in run.torque_range_nm[i]],
+                       "saturation_share": round(float(share[i]), 5)}
+                for i, name in enumerate(run.actuator_names)}
 
     def run_summary(self) -> dict:
         """Whole-run figures, JSON-ready."""

@@ -31,7 +31,11 @@ down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`
 ``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents). The whole
 run's figures (``totals.tracking.free``) also list ``search_troubles`` (added within
 version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "retries",
-"rerun_s", "outcome"}`` (:class:`controller.balance.SearchTrouble`).
+"rerun_s", "outcome"}`` (:class:`controller.balance.SearchTrouble`); and every part's,
+``torque_by_actuator`` (added within version 2; JSON only): per actuator ``{"peak_nm",
+"mean_nm", "range_nm", "saturation_share"}``: the torque's largest and mean magnitude, the
+actuator's range ``[least, largest]`` (its strength either way), and the share of the
+part's frames before any fall at which it was at either end.
 
 ``software`` names the versions the figures were computed with: a free-root run is
 deterministic on one installation, but its search takes discrete decisions, so another
@@ -235,7 +239,8 @@ def write_report(report: dict, json_path: str | os.PathLike,
 
 
 #: Per-name breakdowns kept in the JSON only (their keys vary from row to row).
-_JSON_ONLY = frozenset({"pairs", "dofs", "limit_joint_frames", "warnings"})
+_JSON_ONLY = frozenset({"pairs", "dofs", "limit_joint_frames", "warnings",
+                        "torque_by_actuator"})
 
 
 def _flat(tree: dict, prefix: str = "") -> dict:

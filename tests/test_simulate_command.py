@@ -152,6 +152,22 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert sum(r["retries"] for r in troubles) == free["search_retries"]
     assert {r["outcome"] for r in troubles} <= {"got past"}
     assert ("search: " in printed) == bool(troubles)
+    # each torque limit: how often the joint was at its strength, its peak and mean
+    by_actuator = free["torque_by_actuator"]
+    model = load_model(catalog_model_path(catalog, "02_01"))
+    assert len(by_actuator) == model.nu
+    shares = [a["saturation_share"] for a in by_actuator.values()]
+    assert np.mean(shares) == pytest.approx(free["torque_saturation_share"], abs=1e-4)
+    assert max(a["peak_nm"] for a in by_actuator.values()) == pytest.approx(
+        free["torque_peak_nm"], abs=1e-3)
+    for name, a in by_actuator.items():
+        low, high = a["range_nm"]
+        assert low < 0 < high
+        assert 0 <= a["mean_nm"] <= a["peak_nm"] <= max(-low, high) + 1e-3, name
+        # at full strength: at one end of the range, to the QP's rounding
+        assert a["saturation_share"] == 0 or a["peak_nm"] > 0.99 * min(-low, high), name
+    assert ("at full strength most often: " in printed) == (max(shares) > 0)
+    assert "torque_by_actuator" not in out.with_suffix(".csv").read_text()
     assert window["tracking"]["free"]["error_deg_rms"] < 15.0
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
     assert 0 <= free["heading_error_deg_peak"] <= 180
@@ -166,7 +182,6 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     simulated_frames = (180 if not free["fell"]
                         else min(180, free["fall_frame"] + 1 + 120))  # 1 s after a fall
 
-    model = load_model(catalog_model_path(catalog, "02_01"))
     simulated = read_amc(tmp_path / "s.amc", catalog.skeleton("02"), fps=120.0)
     assert simulated.n_frames == simulated_frames
     with np.load(tmp_path / "c.npz", allow_pickle=False) as control:
@@ -238,3 +253,17 @@ def test_the_search_is_summed_up_in_one_line():
     assert _search_line(troubles) == (
         "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
         "again; got past 1; gave up at 1.07 s (pelvis low and tilted: budget spent)")
+
+
+def test_the_joints_most_often_at_full_strength_in_one_line():
+    from upm.commands.simulate import _strength_line
+
+    by_actuator = {name: {"peak_nm": 1.0, "mean_nm": 0.5, "range_nm": [-1.0, 1.0],
+                          "saturation_share": share}
+                   for name, share in (("lfemur_rx", 0.1844), ("rfoot_rx", 0.12766),
+                                       ("ltoes_rx", 0.0), ("lfoot_rx", 0.11348),
+                                       ("rfemur_rz", 0.0922))}
+    assert _strength_line(by_actuator) == (
+        "  at full strength most often: lfemur_rx 18.4 %, rfoot_rx 12.8 %, lfoot_rx 11.3 % "
+        "of the frames")
+    assert _strength_line({"ltoes_rx": by_actuator["ltoes_rx"]}) == ""

@@ -268,6 +268,17 @@ def _search_line(troubles: list) -> str:
     return line
 
 
+def _strength_line(by_actuator: dict, most: int = 3) -> str:
+    """The actuators most often at their strength, in one line ("" when none is)."""
+    at = sorted(((v["saturation_share"], name) for name, v in by_actuator.items()
+                 if v["saturation_share"] > 0), reverse=True)[:most]
+    if not at:
+        return ""
+    return ("  at full strength most often: "
+            + ", ".join(f"{name} {100 * share:.1f} %" for share, name in at)
+            + " of the frames")
+
+
 def _print_summary(report: dict, json_path, csv_path) -> None:
     m = report["motion"]
     seq = report["sequence"]
@@ -309,4 +320,6 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
         print(line)
         if free.get("search_troubles"):
             print(_search_line(free["search_troubles"]))
+        if _strength_line(free.get("torque_by_actuator", {})):
+            print(_strength_line(free["torque_by_actuator"]))
     print(f"report: {json_path} (summary {csv_path})")
