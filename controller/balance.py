@@ -904,14 +904,14 @@ class _Search:
             self.best = (t, dict(self.choice))
         spent = steps >= self.budget_steps
         i = self._segment(t)
-        if self.trouble is None or i > self.trouble.segment:
+        if self.trouble is None or i > self.trouble.segment:  # a new trouble
             if self._records and "outcome" not in self._records[-1]:
                 self._records[-1]["outcome"] = "got past"
             cause = ("simulation failed",) if failed else self.causes(data, t)
             self._records.append(dict(frame=int(t), time_s=t / self.fps, cause=cause,
                                       retries=0, rerun_s=0.0))
-        if not spent and (self.trouble is None or i > self.trouble.segment):
-            self.trouble = _Trouble(i, i, dict(self.choice))
+            if not spent:
+                self.trouble = _Trouble(i, i, dict(self.choice))
         back = self._back(t)
         if not spent and back is None and self.trouble is not None and self.trouble.sweeping:
             # the sweep found nothing: the choices before it again, then the combinations

@@ -320,6 +320,7 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
         print(line)
         if free.get("search_troubles"):
             print(_search_line(free["search_troubles"]))
-        if _strength_line(free.get("torque_by_actuator", {})):
-            print(_strength_line(free["torque_by_actuator"]))
+        strength = _strength_line(free.get("torque_by_actuator", {}))
+        if strength:
+            print(strength)
     print(f"report: {json_path} (summary {csv_path})")
