@@ -85,7 +85,7 @@ def motion_description(model, motion, model_path=None) -> dict:
 
 
 def _budget(search_budget):
-    from controller.balance import SEARCH_BUDGET
+    from controller.balance_search import SEARCH_BUDGET
 
     return SEARCH_BUDGET if search_budget is None else float(search_budget)
 

@@ -1,5 +1,5 @@
-"""A balance-controller run (:class:`controller.balance.BalanceRun`) in the validity
-report's tracking section: the figures of :func:`controller.balance.window_summary` per
+"""A balance-controller run (:class:`controller.balance_run.BalanceRun`) in the validity
+report's tracking section: the figures of :func:`controller.balance_run.window_summary` per
 part, and the old tracking fields (``fell``, ``fall_time_s``, ``error_deg_rms``) kept
 under their names."""
 
@@ -23,7 +23,7 @@ class BalanceTracking:
 
     Parameters
     ----------
-    run : controller.balance.BalanceRun
+    run : controller.balance_run.BalanceRun
     fall_rule : str
         The fall rule in words, for the report.
     """
@@ -72,7 +72,7 @@ class BalanceTracking:
 
     def summary(self, part: slice | None = None) -> dict:
         """Figures over the frames of ``part`` (all by default), JSON-ready."""
-        from controller.balance import window_summary
+        from controller.balance_run import window_summary
 
         start, stop, _ = (part or slice(None)).indices(self.run.n_frames)
         if stop <= start:
@@ -128,7 +128,7 @@ class BalanceTracking:
 
     def run_summary(self) -> dict:
         """Whole-run figures, JSON-ready."""
-        from controller.balance import trouble_rule
+        from controller.balance_search import trouble_rule
 
         run = self.run
         return {

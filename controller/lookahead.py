@@ -159,14 +159,14 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
 
     Parameters
     ----------
-    control : controller.balance._Control
+    control : controller.balance_control.BalanceControl
     scratch : mujoco.MjData
         Holds the start state; overwritten.
     frame, last : int
         Start and last reference frame.
     gain : float
         Foot-placement gain.
-    mode : controller.balance.Mode
+    mode : controller.balance_control.Mode
     ref_pelvis_m : ndarray, shape (T,)
         The reference's pelvis height per frame.
     pelvis_body : int
@@ -253,7 +253,7 @@ class Lookahead:
 
     Parameters
     ----------
-    control : controller.balance._Control
+    control : controller.balance_control.BalanceControl
     ref_pelvis_m : ndarray, shape (T,)
     pelvis_body : int
     processes : int

@@ -1,10 +1,10 @@
 """The balance controller's search, one attempt ahead on the second process.
 
-The backtracking search (:class:`controller.balance._Search`) runs a 0.25 s segment again
+The backtracking search (:class:`controller.balance_search.Search`) runs a 0.25 s segment again
 in the next of its modes when the character gets into trouble in it (or, with no mode left
 there, the segment before it in its next mode). Which attempt comes next if the current one
 gets into trouble in the segment it has just entered is therefore known at the start of
-that segment (:meth:`controller.balance._Search.next_attempt`): its segment, its mode and
+that segment (:meth:`controller.balance_search.Search.next_attempt`): its segment, its mode and
 its saved start state. So at the start of each segment of a search attempt (one in a mode
 other than the default, where the lookahead does not run), while this process simulates
 the segment, the lookahead's helper process (:class:`controller.lookahead.Lookahead`)
@@ -32,7 +32,7 @@ class SearchAhead:
         Frames per segment of the search.
     substeps : int
     n_frames : int
-    modes : sequence of controller.balance.Mode
+    modes : sequence of controller.balance_control.Mode
     """
 
     def __init__(self, lookahead, sim, every: int, substeps: int, n_frames: int, modes):
@@ -45,7 +45,7 @@ class SearchAhead:
         self.chain = None  # the last frame taken from the recording, while on it
 
     def restarted(self, search, segment: int, mode: int, searching: bool) -> None:
-        """``search`` (:class:`controller.balance._Search`) has just restarted the run
+        """``search`` (:class:`controller.balance_search.Search`) has just restarted the run
         at ``segment`` in ``mode``. ``searching``: a retry of the search, which may be
         followed by another (not its fallback on the attempt that got furthest)."""
         self.chain = None
@@ -62,7 +62,7 @@ class SearchAhead:
     def entered(self, search, t: int) -> None:
         """The run, in ``search``'s current attempt, is at frame ``t``, the first of a
         segment: guess that the attempt gets into trouble in this segment, and simulate
-        the attempt the search would make next (:meth:`controller.balance._Search.
+        the attempt the search would make next (:meth:`controller.balance_search.Search.
         next_attempt`) ahead, until it gets into trouble or its first segment ends."""
         self.guess = None  # an earlier guess still running is dropped when it returns
         nxt = search.next_attempt(t)

@@ -65,7 +65,7 @@ _METRICS = (
                   "1 if the character fell during the run (before, in or after the window)"),
     PhysicsMetric("ends_in_trouble", "share", "ends going down %",
                   "1 if the character did not fall but was in trouble at the run's last "
-                  "frame (controller.balance.trouble_rule: pelvis or head well below the "
+                  "frame (controller.balance_search.trouble_rule: pelvis or head well below the "
                   "motion's, or the pelvis tilted): going down where the run ends"),
     PhysicsMetric("fell_or_going_down", "share", "falls or going down %",
                   "1 if the character fell or ended going down: the run did not end with "
@@ -167,7 +167,8 @@ def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
 def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
     """Run the balance controller over ``motion`` and the figures of its window."""
     from controller import to_qpos
-    from controller.balance import follow, window_summary
+    from controller.balance import follow
+    from controller.balance_run import window_summary
 
     run = follow(model, to_qpos(model, motion), motion.fps)
     summary = window_summary(run, start, stop)

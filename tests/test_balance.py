@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from controller import to_qpos
-from controller.balance import WINDOW_KEYS, follow, replay, torque_model, window_summary
+from controller.balance import follow
+from controller.balance_control import torque_model
+from controller.balance_run import WINDOW_KEYS, replay, window_summary
 from controller.qpos import joint_layout
 from controller.tracking import track_qpos
 
@@ -124,7 +126,7 @@ def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(lifted):
 
 
 def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
-    from controller.balance import TROUBLE_UP
+    from controller.balance_search import TROUBLE_UP
     from controller.qpos import free_joint
 
     # with both feet drawn up the character goes down: the search spends its budget and

@@ -7,7 +7,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from controller import balance, to_qpos
+from controller import balance_search, to_qpos
+from controller.balance import follow
+from controller.balance_control import MODES, torque_model
+from controller.balance_run import replay
 from controller.dropouts import fill_dropouts
 from controller.qpos import joint_layout
 
@@ -45,13 +48,13 @@ def test_clean_clip_untouched(model02, walk):
 
 @pytest.fixture
 def search(model02):
-    sim = balance.torque_model(model02)
+    sim = torque_model(model02)
     data = mujoco.MjData(sim)
-    fps, every = 120.0, int(round(balance.SEGMENT_S * 120.0))
+    fps, every = 120.0, int(round(balance_search.SEGMENT_S * 120.0))
     n_frames = 20 * every
     ref_pelvis, ref_head = np.full(n_frames, 1.0), np.full(n_frames, 1.6)
     head = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
-    s = balance._Search(sim, n_frames, fps, 5, (ref_pelvis, ref_head), (1, head))
+    s = balance_search.Search(sim, n_frames, fps, 5, (ref_pelvis, ref_head), (1, head))
     return s, data, every
 
 
@@ -63,7 +66,7 @@ def _run_to(search, data, t):
 
 def test_search_retries_then_backtracks(search):
     s, data, every = search
-    modes = len(balance.MODES)
+    modes = len(MODES)
     t = 2 * every + 5  # in segment 2
     _run_to(s, data, t)
     # the segment in trouble runs again in each next mode, from its saved start
@@ -131,7 +134,7 @@ def test_search_records_each_trouble_and_how_it_ended(search):
     _run_to(s, data, t - 2)  # the next attempt gets into trouble sooner
     assert s.retry(data, t - 2, steps=0) == 2 * every + 1
     (first,) = s.troubles()
-    assert first._replace(rerun_s=0.0) == balance.SearchTrouble(
+    assert first._replace(rerun_s=0.0) == balance_search.SearchTrouble(
         frame=t, time_s=t / 120.0, cause=("pelvis low",), retries=2, rerun_s=0.0,
         outcome="got past")  # open: so far
     assert first.rerun_s == pytest.approx((5 + 3) / 120.0)
@@ -153,7 +156,7 @@ def test_search_goes_back_as_far_as_its_reach(search):
     back to that one, MAX_BACKTRACK segments before the trouble; with it spent too,
     nothing is left in reach and the run goes on as it is."""
     s, data, every = search
-    last, reach = len(balance.MODES) - 1, balance.MAX_BACKTRACK
+    last, reach = len(MODES) - 1, balance_search.MAX_BACKTRACK
     i = reach + 2  # the segment in trouble
     t = i * every + 5
     assert t < s.n_frames
@@ -172,7 +175,7 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     in every mode, segment 1 takes the next ones with segment 2 back on the mode it had
     (inherited), not every combination of the two."""
     s, data, every = search
-    modes = len(balance.MODES)
+    modes = len(MODES)
     t = 2 * every + 5
     _run_to(s, data, t)
     for _ in range(1, modes):
@@ -195,9 +198,9 @@ def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
     """With the sweep through every segment in reach spent, the search runs the choices
     before it again, from the first segment they differ in, and then backtracks through
     the combinations, nearest segment first."""
-    monkeypatch.setattr(balance, "MAX_BACKTRACK", 1)
+    monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 1)
     s, data, every = search
-    modes = len(balance.MODES)
+    modes = len(MODES)
     t = 2 * every + 5
     _run_to(s, data, t)
     for _ in range(2 * (modes - 1)):  # segment 2's modes, then segment 1's
@@ -252,16 +255,16 @@ def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk,
     """Trouble everywhere (any pelvis height is 'too low'): the search goes back, tries
     modes, spends its budget and settles on the attempt that got furthest; the torques it
     recorded still replay open-loop to exactly the motion reported."""
-    monkeypatch.setattr(balance, "TROUBLE_DROP_M", -10.0)
-    monkeypatch.setattr(balance, "SEARCH_BUDGET", 3.0)
+    monkeypatch.setattr(balance_search, "TROUBLE_DROP_M", -10.0)
+    monkeypatch.setattr(balance_search, "SEARCH_BUDGET", 3.0)
     qpos = to_qpos(model02, walk)[:75]
-    run = balance.follow(model02, qpos, walk.fps)
+    run = follow(model02, qpos, walk.fps)
     assert run.retries > 0
     assert sum(r.retries for r in run.troubles) == run.retries
     assert {r.outcome for r in run.troubles} <= {"budget spent", "no mode within reach"}
     assert all(r.cause == ("pelvis low",) for r in run.troubles)
     assert run.simulated_steps > run.steps
     assert run.segment_modes.max() > 0
-    again = balance.replay(model02, run)
+    again = replay(model02, run)
     np.testing.assert_allclose(again, run.qpos, atol=1e-9, equal_nan=True)
 

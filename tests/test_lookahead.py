@@ -10,8 +10,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from controller import balance, to_qpos
-from controller.balance import MODES, follow, torque_model
+from controller import gain_selection, to_qpos
+from controller.balance import follow
+from controller.balance_control import MODES, torque_model
 from controller.lookahead import Lookahead
 
 
@@ -46,7 +47,7 @@ def test_a_whole_walk_is_the_same_however_its_frames_are_computed(model02, walk,
     qpos = to_qpos(model02, walk)
     one = follow(model02, qpos, walk.fps)
     two = follow(model02, qpos, walk.fps, processes=2)
-    monkeypatch.setattr(balance._GainSelector, "recorded", lambda self, t, gain: None)
+    monkeypatch.setattr(gain_selection.GainSelector, "recorded", lambda self, t, gain: None)
     simulated = follow(model02, qpos, walk.fps)
     assert not one.fell and one.reused_steps > 0
     for run in (two, simulated):
@@ -59,17 +60,17 @@ def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short
                                                                    monkeypatch, processes):
     qpos, fps = short_walk
     taken = []
-    recorded = balance._GainSelector.recorded
+    recorded = gain_selection.GainSelector.recorded
 
     def counting(self, t, gain):
         out = recorded(self, t, gain)
         taken.append(out is not None)
         return out
 
-    monkeypatch.setattr(balance._GainSelector, "recorded", counting)
+    monkeypatch.setattr(gain_selection.GainSelector, "recorded", counting)
     reused = follow(model02, qpos, fps, processes=processes)
     assert sum(taken) > 60  # most of the run's frames came from its lookahead
-    monkeypatch.setattr(balance._GainSelector, "recorded", lambda self, t, gain: None)
+    monkeypatch.setattr(gain_selection.GainSelector, "recorded", lambda self, t, gain: None)
     simulated = follow(model02, qpos, fps, processes=processes)
     np.testing.assert_array_equal(reused.ctrl, simulated.ctrl)
     np.testing.assert_array_equal(reused.qpos, simulated.qpos)

@@ -122,7 +122,8 @@ def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> 
     two."""
     import mujoco
 
-    from controller.balance import follow, torque_model
+    from controller.balance import follow
+    from controller.balance_control import torque_model
 
     run = min((follow(model, qpos, fps) for _ in range(repeat)), key=lambda r: r.wall_s)
     two = min((follow(model, qpos, fps, processes=2) for _ in range(repeat)),

@@ -48,7 +48,7 @@ def configure(parser) -> None:
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="UPM for the rows joined by upm or feasible (default: trained on "
                              "the train split, cached)")
-    from controller.balance import SEARCH_BUDGET
+    from controller.balance_search import SEARCH_BUDGET
 
     parser.add_argument("--search-budget", metavar="X", type=float, default=None,
                         help="the balance controller's search budget, in multiples of the "

@@ -24,7 +24,7 @@ summary beside it. --video renders offscreen (no GPU needed: OSMesa) an .mp4, a 
 a .png filmstrip of the whole sequence; --amc writes what the free-root character
 actually did as an AMC on the subject's skeleton, --control the torques the balance
 controller applied at every physics step (.npz: replayable open-loop with
-controller.balance.replay); --filmstrip a PNG of the frames around each
+controller.balance_run.replay); --filmstrip a PNG of the frames around each
 window; --viewer plays it in MuJoCo's viewer where there is a display.
 
 A free-root run is one path of a chaotic system: whether it falls can turn on differences
@@ -111,7 +111,7 @@ def _default_processes() -> int:
 
 
 def _default_budget() -> float:
-    from controller.balance import SEARCH_BUDGET
+    from controller.balance_search import SEARCH_BUDGET
 
     return SEARCH_BUDGET
 
@@ -240,7 +240,7 @@ def _write_simulated_amc(model, qpos, motion, path):
 
 
 def _write_control(run, path):
-    """The balance run's control and start state, for controller.balance.replay."""
+    """The balance run's control and start state, for controller.balance_run.replay."""
     import numpy as np
 
     from upm.fileio import atomic_path

@@ -1,0 +1,107 @@
+"""The foot-placement gain of the balance controller's default mode, chosen by lookahead.
+
+Every :data:`SELECT_EVERY_S` the gain is chosen among :data:`SELECT_GAINS` by rolling the
+same controller out :data:`LOOKAHEAD_S` ahead from a copy of the state and keeping the
+gain whose pelvis stays nearest the reference's height and upright
+(:mod:`controller.lookahead`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from controller.balance_control import MODES
+
+#: Foot-placement gains chosen among by short rollouts for the default mode ...
+SELECT_GAINS = (0.3, 0.6)
+#: ... every this many seconds ...
+SELECT_EVERY_S = 0.5
+#: ... each rolled out this far ahead.
+LOOKAHEAD_S = 1.0
+
+
+class GainSelector:
+    """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
+    :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
+    pelvis nearest the reference's height and upright, and the pace nearest the
+    reference's (:func:`controller.lookahead.rollout_cost`); the first on ties. The rollouts
+    run on ``processes`` processes (:class:`controller.lookahead.Lookahead`)."""
+
+    def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
+                 processes: int = 1, stop=None):
+        """``stop``: where a rollout run ahead for the search ends
+        (:meth:`controller.lookahead.Lookahead.send`)."""
+        from controller.lookahead import Lookahead, Recording
+
+        self.n_frames = n_frames
+        self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
+        self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
+        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes, stop)
+        # on one process the chosen rollout is recorded whole: the next choice goes on
+        # from its second half instead of simulating it again
+        self.resumes = processes == 1
+        capacity = (self.lookahead_frames if self.resumes
+                    else min(self.every_frames, self.lookahead_frames))
+        self.recordings = [Recording(control.sim, capacity, control.substeps)
+                           for _ in SELECT_GAINS]
+        self.chain = None
+        self.last_choice = 0
+        self.last_cost = math.inf
+
+    def choose(self, data, frame: int) -> float:
+        """The gain from frame ``frame`` on (``data``: the state after it). Every gain's
+        rollout is recorded for :meth:`recorded` (on two processes, the one expected to
+        win, the gain chosen last time, runs in this process)."""
+        last = min(self.n_frames - 1, frame + self.lookahead_frames)
+        resume = self._resumable(frame)
+        self.forget(keep=resume)
+        costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0],
+                                     self.recordings, here=self.last_choice, resume=resume)
+        self.chain = frame
+        best, best_cost = 0, math.inf
+        for i, cost in enumerate(costs):
+            if cost < best_cost:
+                best, best_cost = i, cost
+        self.last_choice, self.last_cost = best, best_cost
+        return SELECT_GAINS[best]
+
+    def _resumable(self, frame: int) -> int | None:
+        """The last choice's gain, if its rollout can go on from ``frame`` (one process,
+        the run took every frame up to ``frame`` from it, and it recorded every frame it
+        simulated, finite): its recording is moved on to start after ``frame``."""
+        if not self.resumes or self.chain != frame:
+            return None
+        recording = self.recordings[self.last_choice]
+        start = recording.start_frame
+        ended = min(self.n_frames - 1, start + self.lookahead_frames)
+        if (start < 0 or recording.gain != SELECT_GAINS[self.last_choice] or ended <= frame
+                or recording.frames != ended - start or not math.isfinite(self.last_cost)):
+            return None
+        recording.advance(frame - start)
+        return self.last_choice
+
+    def recorded(self, t: int, gain: float):
+        """Frame ``t`` as the last choice's rollout simulated it, if the run is still on
+        that rollout (every frame since the choice taken from it, with its gain in the
+        default mode): :meth:`controller.lookahead.Recording.frame`'s tuple, for
+        :func:`controller.lookahead.restore_frame`, else None."""
+        if self.chain != t - 1:
+            self.chain = None
+            return None
+        out = None
+        for recording in self.recordings:
+            out = out or recording.frame(t, gain)
+        self.chain = t if out is not None else None
+        return out
+
+    def forget(self, keep: int | None = None) -> None:
+        """The run went back: nothing recorded is its future any more (but gain
+        ``keep``'s recording, which goes on)."""
+        for i, recording in enumerate(self.recordings):
+            if i != keep:
+                recording.clear()
+        self.chain = None
+
+    def close(self) -> None:
+        self.lookahead.close()
+
