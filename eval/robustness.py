@@ -29,7 +29,7 @@ from upm.errors import UsageError
 
 CHECKPOINT_NAME = "robustness-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/robustness-checkpoint"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
 #: The default standard deviation of the per-channel offsets, degrees.
 OFFSET_DEG = 0.1
 #: The default number of offset seeds (besides the exact reference).
@@ -197,7 +197,9 @@ def reference(settings: Settings, row: Row, seed: int):
 
 def run_unit(settings: Settings, unit: Unit) -> dict:
     """One run (in a worker): the figures of :data:`RUN_FIELDS`, plus ``seconds`` (the
-    motion's length) and ``wall_s``."""
+    motion's length), ``wall_s`` and ``search_gave_up``: the troubles the search gave up
+    on (``{"time_s", "outcome"}`` each, the outcome ``"budget spent"`` or ``"no mode
+    within reach"``; :class:`controller.balance_search.SearchTrouble`)."""
     from controller.analysis import free_run
     from controller.qpos import to_qpos
     from eval.study import single_threaded_blas
@@ -208,6 +210,9 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
                         search_budget=settings.search_budget, processes=1)
     summary = tracking.run_summary()
     out = {k: summary[k] for k in RUN_FIELDS}
+    out["search_gave_up"] = [{"time_s": trouble["time_s"], "outcome": trouble["outcome"]}
+                             for trouble in summary["search_troubles"]
+                             if trouble["outcome"] != "got past"]
     out["seconds"] = round(motion.n_frames / motion.fps, 4)
     out["wall_s"] = round(tracking.run.wall_s, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
@@ -306,6 +311,7 @@ def row_summary(result: RobustnessResult, row: Row) -> dict:
         "offset_runs": len(offsets),
         "offset_fall_times_s": sorted(r["fall_time_s"] for r in offsets if r["fell"]),
         "falls": sum(bool(r["fell"]) for r in runs), "runs": len(runs),
+        "falls_budget_spent": sum(bool(r["fell"]) and _budget_spent(r) for r in runs),
         "ends_going_down": sum(bool(r["ends_in_trouble"]) for r in up),
         "standing_error_deg_rms": span(r["error_deg_rms"] for r in up),
         "standing_body_error_mm_mean": span(r["body_error_mm_mean"] for r in up),
@@ -315,17 +321,23 @@ def row_summary(result: RobustnessResult, row: Row) -> dict:
     }
 
 
+def _budget_spent(run: dict) -> bool:
+    """Whether the search gave up on a trouble of the run with its budget spent."""
+    return any(g["outcome"] == "budget spent" for g in run["search_gave_up"])
+
+
 def summary(result: RobustnessResult) -> dict:
     """The study as JSON: settings, per-row figures, totals and every run."""
     from controller.report import software_versions
 
     rows = [row_summary(result, row) for row in result.rows]
     return {
-        "format": "upm-controller/robustness", "version": 1,
+        "format": "upm-controller/robustness", "version": 2,
         "settings": {**result.settings.as_dict(), "offset_seeds": result.seeds},
         "software": software_versions(),
         "totals": {"falls": sum(r["falls"] for r in rows),
                    "runs": sum(r["runs"] for r in rows),
+                   "falls_budget_spent": sum(r["falls_budget_spent"] for r in rows),
                    "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
                    "offset_falls": sum(r["offset_falls"] for r in rows),
                    "offset_runs": sum(r["offset_runs"] for r in rows)},
@@ -369,6 +381,10 @@ def table_markdown(report: dict) -> str:
                  f"{len(report['rows'])} on the exact references, {t['offset_falls']} of "
                  f"{t['offset_runs']} on references moved by N(0, {s['offset_deg']:g} deg) "
                  "per joint channel).")
+    if t["falls"]:
+        lines.append(f"Of the falls, {t['falls_budget_spent']} came after the search had "
+                     "spent its budget (a larger `--search-budget` may carry them), the "
+                     "others' with no mode left within its reach.")
     return "\n".join(lines) + "\n"
 
 

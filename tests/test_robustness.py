@@ -6,7 +6,14 @@ import sys
 
 import pytest
 
-from eval.robustness import CHECKPOINT_NAME, Row, Settings, parse_row, run_robustness
+from eval.robustness import (
+    CHECKPOINT_NAME,
+    CHECKPOINT_VERSION,
+    Row,
+    Settings,
+    parse_row,
+    run_robustness,
+)
 from upm.cli import main
 from upm.errors import UsageError
 
@@ -82,8 +89,8 @@ def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     settings = Settings(str(data_dir), None, 0.1, None)
     row = Row(("02_01@0:60",))
     earlier = Checkpoint(tmp_path, settings.as_dict(), name=CHECKPOINT_NAME,
-                         format_name="upm-controller/robustness-checkpoint", version=1,
-                         numbers=False)
+                         format_name="upm-controller/robustness-checkpoint",
+                         version=CHECKPOINT_VERSION, numbers=False)
     earlier.open()
     kept = {"fell": False, "fall_time_s": None, "seconds": 0.5, "marker": 1}
     earlier.add(f"{row.text}#0", kept)
@@ -111,3 +118,22 @@ def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     assert message in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
     assert not (tmp_path / "r").exists()
+
+
+def test_a_fall_after_the_search_spent_its_budget_is_counted_as_such(data_dir, tmp_path,
+                                                                    capsys):
+    """05_11's dance falls within half a second; with a budget of half the clip's steps the
+    search gives up on it with the budget spent, and the report says so."""
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows", "05_11@0:120", "--seeds",
+                 "0", "--workers", "1", "--no-figures", "--search-budget", "0.5",
+                 "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    report = json.loads((out / "robustness.json").read_text())
+    run = report["runs"]["05_11@0:120#0"]
+    assert run["fell"] and run["search_gave_up"]
+    assert run["search_gave_up"][-1]["outcome"] == "budget spent"
+    assert run["search_gave_up"][0]["time_s"] <= run["fall_time_s"]
+    assert report["rows"][0]["falls_budget_spent"] == 1
+    assert report["totals"]["falls_budget_spent"] == 1
+    assert "Of the falls, 1 came after the search had spent its budget" in printed
