@@ -116,12 +116,16 @@ class Settings:
         Standard deviation of each joint channel's offset, degrees.
     search_budget : float or None
         The balance controller's search budget (None: its default).
+    cut : str
+        Where a sequence's pieces but the last end: ``"whole"`` (their last frame) or
+        ``"matched"`` (:func:`upm.transitions.cuts.matched_pieces`).
     """
 
     data_dir: str
     map_path: str | None
     offset_deg: float
     search_budget: float | None
+    cut: str = "whole"
 
     def as_dict(self) -> dict:
         import hashlib
@@ -132,7 +136,8 @@ class Settings:
             digest = hashlib.sha256(Path(self.map_path).read_bytes()).hexdigest()[:16]
             the_map = f"{Path(self.map_path).name} (sha256 {digest})"
         return {"data": Path(self.data_dir).name, "map": the_map,
-                "offset_deg": self.offset_deg, "search_budget": self.search_budget}
+                "offset_deg": self.offset_deg, "search_budget": self.search_budget,
+                "cut": self.cut}
 
 
 class Unit(NamedTuple):
@@ -166,6 +171,7 @@ def reference(settings: Settings, row: Row, seed: int):
     from upm.catalog import Catalog, parse_clip_ref
     from upm.perturb import offset_joint_angles
     from upm.transitions import build_sequence
+    from upm.transitions.cuts import matched_pieces
     from upm.transitions.registry import KeySourceContext, build_key_source, get_method
 
     if _WORKER.get("settings") != settings:
@@ -176,6 +182,8 @@ def reference(settings: Settings, row: Row, seed: int):
     if row not in _WORKER["sequences"]:
         refs = [parse_clip_ref(p) for p in row.pieces]
         pieces = [catalog.load_ref(ref) for ref in refs]
+        if settings.cut == "matched" and len(pieces) > 1:
+            pieces = matched_pieces(pieces)[0]
         source = None
         if len(pieces) > 1:
             if row.method not in _WORKER["sources"]:
@@ -380,7 +388,9 @@ def table_markdown(report: dict) -> str:
     lines.append(f"Falls: {t['falls']} of {t['runs']} runs ({t['exact_falls']} of "
                  f"{len(report['rows'])} on the exact references, {t['offset_falls']} of "
                  f"{t['offset_runs']} on references moved by N(0, {s['offset_deg']:g} deg) "
-                 "per joint channel).")
+                 "per joint channel)" + (", each sequence's pieces cut where the next one's "
+                                         "gait phase matches (`--cut matched`)."
+                                         if s.get("cut") == "matched" else "."))
     if t["falls"]:
         lines.append(f"Of the falls, {t['falls_budget_spent']} came after the search had "
                      "spent its budget (a larger `--search-budget` may carry them), the "

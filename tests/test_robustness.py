@@ -137,3 +137,18 @@ def test_a_fall_after_the_search_spent_its_budget_is_counted_as_such(data_dir, t
     assert report["rows"][0]["falls_budget_spent"] == 1
     assert report["totals"]["falls_budget_spent"] == 1
     assert "Of the falls, 1 came after the search had spent its budget" in printed
+
+
+def test_cut_matched_runs_the_sequence_on_pieces_cut_at_the_next_ones_phase(data_dir,
+                                                                            tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows",
+                 "02_01@0:200+02_02@0:60,linear", "--seeds", "0", "--workers", "1",
+                 "--no-figures", "--cut", "matched", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    report = json.loads((out / "robustness.json").read_text())
+    assert report["settings"]["cut"] == "matched"
+    run = report["runs"]["02_01@0:200+02_02@0:60,linear#0"]
+    # 02_01 ends earlier than its frame 200: the sequence is shorter than the whole pieces'
+    assert run["seconds"] < (200 + 20 + 60) / 120
+    assert "cut where the next one's gait phase matches" in printed

@@ -218,11 +218,15 @@ class Catalog:
 
     def load_ref(self, ref: ClipRef | str) -> Motion:
         """Read the frames a :class:`ClipRef` names (``CLIP@A:B``; ``CLIP@F`` is one frame)."""
+        return self.load_span(ref)[0]
+
+    def load_span(self, ref: ClipRef | str) -> tuple[Motion, int]:
+        """The frames a :class:`ClipRef` names and the clip frame they start at (0-based)."""
         if isinstance(ref, str):
             ref = parse_clip_ref(ref)
         motion = self.load(ref.name)
         if not ref.has_range and ref.start is None:
-            return motion
+            return motion, 0
         n = motion.n_frames
         start = ref.start if ref.start is not None else 0
         start = start + n if start < 0 else start
@@ -236,7 +240,7 @@ class Catalog:
         if not 0 <= start < stop <= n:
             raise UsageError(f"{ref}: frames out of range (clip {ref.name} has {n} frames, "
                              f"numbered 0 to {n - 1})")
-        return motion.frames(start, stop)
+        return motion.frames(start, stop), start
 
 
 def _manifest_rows(path: Path, reader: csv.DictReader) -> dict[str, dict]:

@@ -54,6 +54,9 @@ def configure(parser) -> None:
                         help="the balance controller's search budget, in multiples of the "
                              "run's own physics steps (default: the controller's, "
                              f"{SEARCH_BUDGET:g})")
+    from upm.commands.transition import add_cut_argument
+
+    add_cut_argument(parser)
     parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
                         help=f"output directory (default: ./{DEFAULT_OUT})")
     parser.add_argument("--workers", type=int, metavar="K", default=None,
@@ -117,7 +120,8 @@ def run(args) -> int:
         if catalog.load_ref(piece).n_frames < 2:  # a one-line error for a bad clip or range
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
     settings = Settings(data_dir=str(catalog.root), map_path=args.map,
-                        offset_deg=float(args.offset_deg), search_budget=args.search_budget)
+                        offset_deg=float(args.offset_deg), search_budget=args.search_budget,
+                        cut=args.cut)
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
           f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
     from eval.executor import executor_session

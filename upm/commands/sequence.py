@@ -18,12 +18,13 @@ HELP = "join clips (CLIP@A:B ...) with transitions into one AMC or BVH"
 
 def configure(parser) -> None:
     from upm.commands.common import add_data_argument
-    from upm.commands.transition import add_method_arguments
+    from upm.commands.transition import add_cut_argument, add_method_arguments
 
     add_data_argument(parser)
     parser.add_argument("pieces", nargs="+", metavar="CLIP@A:B",
                         help="the pieces, in order (at least two)")
     add_method_arguments(parser)
+    add_cut_argument(parser)
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate of the result (default: the first piece's)")
     parser.add_argument("--out", required=True, metavar="OUT.amc|OUT.bvh",

@@ -47,12 +47,13 @@ RENDER_CHOICES = ("driven", "free", "reference")
 
 def configure(parser) -> None:
     from upm.commands.common import add_data_argument
-    from upm.commands.transition import add_method_arguments
+    from upm.commands.transition import add_cut_argument, add_method_arguments
 
     add_data_argument(parser)
     parser.add_argument("--sequence", nargs="+", required=True, metavar="CLIP@A:B",
                         help="the pieces, in order (CLIP, CLIP@A:B frames A to B-1, CLIP@F)")
     add_method_arguments(parser)
+    add_cut_argument(parser)
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate of the sequence (default: the first piece's)")
     parser.add_argument("--report", required=True, metavar="R.json",

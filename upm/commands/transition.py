@@ -42,6 +42,19 @@ def add_method_arguments(parser, default_method: str = "upm") -> None:
                              "previous clip's heading")
 
 
+def add_cut_argument(parser) -> None:
+    """--cut: shared by ``upm sequence`` and ``upm simulate``."""
+    from upm.transitions.cuts import MATCH_SEARCH_S
+
+    parser.add_argument("--cut", choices=("whole", "matched"), default="whole",
+                        help="where each piece but the last ends: 'whole' (default) at its "
+                             "last frame; 'matched' at the frame, within its last "
+                             f"{MATCH_SEARCH_S:g} s, whose feet (ankles relative to the "
+                             "pelvis, and their velocities) are nearest the next piece's "
+                             "first frame's, so the window joins the same gait phase (the "
+                             "pieces used are reported as CLIP@A:B)")
+
+
 def sequence_from_args(args, pieces_text: list[str]):
     """The clips named on the command line joined by ``--method`` transitions.
 
@@ -61,7 +74,10 @@ def sequence_from_args(args, pieces_text: list[str]):
 
     catalog = Catalog(args.data)
     refs = [parse_clip_ref(text) for text in pieces_text]
-    pieces = [catalog.load_ref(ref) for ref in progress(refs, desc="reading", unit="clip")]
+    spans = [catalog.load_span(ref) for ref in progress(refs, desc="reading", unit="clip")]
+    pieces = [piece for piece, _ in spans]
+    if getattr(args, "cut", "whole") == "matched" and len(pieces) > 1:
+        pieces, refs = _matched(pieces, refs, [start for _, start in spans])
     if len(refs) > 1:
         key_source = key_source_for(args.method, args.map, catalog)
     else:
@@ -73,6 +89,25 @@ def sequence_from_args(args, pieces_text: list[str]):
     sequence = build_sequence(pieces, args.method, args.frames, args.alpha, key_source,
                               fps=args.fps, align_heading=args.align_heading)
     return catalog, refs, sequence
+
+
+def _matched(pieces, refs, starts):
+    """The pieces cut where the next one's gait phase matches, and their references."""
+    from upm.catalog import ClipRef
+    from upm.errors import UsageError
+    from upm.transitions.cuts import matched_pieces
+
+    short = [str(ref) for ref, piece in zip(refs, pieces, strict=True) if piece.n_frames < 2]
+    if short:
+        raise UsageError(f"--cut matched needs pieces of at least 2 frames: {short[0]} is one "
+                         "(a held pose has no gait phase)")
+    cut, cuts = matched_pieces(pieces)
+    out = [ClipRef(ref.name, start, start + piece.n_frames, has_range=True)
+           for ref, piece, start in zip(refs[:-1], cut, starts, strict=False)]
+    for ref, after, c in zip(out, refs[1:], cuts, strict=True):
+        print(f"cut {ref}: its feet {c.distance_m:.2f} m from {after}'s first frame's "
+              f"(at its last frame {c.whole_distance_m:.2f} m)")
+    return cut, out + refs[-1:]
 
 
 def configure(parser) -> None:
