@@ -205,7 +205,7 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     np.testing.assert_allclose(to_qpos(model, simulated)[:, :3], replayed[:, :3], atol=1e-6)
 
 
-def test_servo_controller_is_still_available(tmp_path, data_dir):
+def test_servo_controller_is_still_available(tmp_path, data_dir, capsys):
     out = tmp_path / "servo.json"
     assert main(["simulate", "--data", str(data_dir), "--method", "linear", "--frames", "20",
                  "--sequence", "02_01@0:90", "02_02@30:100", "--modes", "free",
@@ -213,6 +213,9 @@ def test_servo_controller_is_still_available(tmp_path, data_dir):
     report = json.loads(out.read_text())
     assert report["settings"]["tracking"]["free_controller"] == "servo"
     assert "body_error_mm_mean" not in report["totals"]["tracking"]["free"]
+    # the servos fall; the pieces were joined whole, and the summary points at the cut
+    assert report["totals"]["tracking"]["free"]["fell"] and report["sequence"]["cut"] == "whole"
+    assert "--cut matched joins each" in capsys.readouterr().out
 
 
 def test_search_budget_and_offsets_are_recorded_and_checked(tmp_path, data_dir, capsys):

@@ -189,6 +189,7 @@ def run(args) -> int:
         search_budget=args.search_budget, processes=args.processes)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
+                          "cut": args.cut,
                           "map": args.map, "align_heading": args.align_heading,
                           "offset_deg": args.offset_deg,
                           "offset_seed": args.offset_seed if args.offset_deg > 0 else None}
@@ -319,6 +320,9 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
                      f"{free['heading_error_deg_peak']:.0f} deg, "
                      f"{free['wall_s_per_sim_s']:.2f} wall s per simulated s")
         print(line)
+        if free["fell"] and seq.get("cut") == "whole" and len(seq["pieces"]) > 1:
+            print("  (the pieces are joined whole, wherever in its stride each ends or "
+                  "begins: --cut matched joins each where the next one's gait phase matches)")
         if free.get("search_troubles"):
             print(_search_line(free["search_troubles"]))
         strength = _strength_line(free.get("torque_by_actuator", {}))
