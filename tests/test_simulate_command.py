@@ -270,3 +270,18 @@ def test_the_joints_most_often_at_full_strength_in_one_line():
         "  at full strength most often: lfemur_rx 18.4 %, rfoot_rx 12.8 %, lfoot_rx 11.3 % "
         "of the frames")
     assert _strength_line({"ltoes_rx": by_actuator["ltoes_rx"]}) == ""
+
+
+def test_cut_matched_drives_the_pieces_it_cut(tmp_path, data_dir, capsys):
+    out = tmp_path / "cut.json"
+    assert main(["simulate", "--data", str(data_dir), "--method", "linear",
+                 "--sequence", "02_01@0:200", "02_02@0:100", "--cut", "matched",
+                 "--modes", "driven", "--report", str(out)]) == 0
+    report = json.loads(out.read_text())
+    first, second = report["sequence"]["pieces"]
+    assert report["sequence"]["cut"] == "matched" and second == "02_02@0:100"
+    stop = int(first.split(":")[1])
+    assert first == f"02_01@0:{stop}" and 200 - 144 <= stop < 200
+    # the driven run covers the cut piece, the window and the next piece
+    assert report["motion"]["frames"] == stop + 20 + 100
+    assert f"cut {first}: its feet" in capsys.readouterr().out
