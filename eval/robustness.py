@@ -392,9 +392,10 @@ def table_markdown(report: dict) -> str:
                                          "gait phase matches (`--cut matched`)."
                                          if s.get("cut") == "matched" else "."))
     if t["falls"]:
-        lines.append(f"Of the falls, {t['falls_budget_spent']} came after the search had "
-                     "spent its budget (a larger `--search-budget` may carry them), the "
-                     "others' with no mode left within its reach.")
+        spent, other = t["falls_budget_spent"], t["falls"] - t["falls_budget_spent"]
+        lines.append(f"Of the falls, {spent} came after the search had spent its budget (a "
+                     "larger `--search-budget` may carry them)"
+                     + (f", {other} with no mode left within its reach." if other else "."))
     return "\n".join(lines) + "\n"
 
 
