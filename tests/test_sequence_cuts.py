@@ -78,3 +78,10 @@ def test_cut_matched_refuses_a_held_pose(data_dir, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and "02_01@100 is one" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "s.amc").exists()
+
+
+@pytest.mark.parametrize("frames", [2, 3, 50, 200])
+def test_a_short_piece_keeps_at_least_half_its_frames(walks, frames):
+    before = walks[0].frames(100, 100 + frames)
+    cut = matched_cut(before, walks[1])
+    assert max(2, (frames + 1) // 2) <= cut.stop <= frames

@@ -49,10 +49,10 @@ def add_cut_argument(parser) -> None:
     parser.add_argument("--cut", choices=("whole", "matched"), default="whole",
                         help="where each piece but the last ends: 'whole' (default) at its "
                              "last frame; 'matched' at the frame, within its last "
-                             f"{MATCH_SEARCH_S:g} s, whose feet (ankles relative to the "
-                             "pelvis, and their velocities) are nearest the next piece's "
-                             "first frame's, so the window joins the same gait phase (the "
-                             "pieces used are reported as CLIP@A:B)")
+                             f"{MATCH_SEARCH_S:g} s and its second half, whose feet (ankles "
+                             "relative to the pelvis, and their velocities) are nearest the "
+                             "next piece's first frame's, so the window joins the same gait "
+                             "phase (the pieces used are reported as CLIP@A:B)")
 
 
 def sequence_from_args(args, pieces_text: list[str]):

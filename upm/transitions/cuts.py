@@ -5,7 +5,8 @@ in its stride each happens to be: 02_01 ends with its left foot early in its swi
 02_02 begins with it late in its swing, so within the 0.17 s window the feet cross most
 of a stride near the floor, which a body standing on a foot cannot do. Motion graphs
 (Kovar et al. 2002) and motion matching cut where the poses match instead. Here each
-clip but the last ends at the frame, within its last :data:`MATCH_SEARCH_S`, whose feet
+clip but the last ends at the frame, within its last :data:`MATCH_SEARCH_S` and its
+second half, whose feet
 are nearest the next clip's first frame's: both ankles' positions relative to the pelvis,
 in the pelvis's heading frame, and their velocities (so that a foot passing forward is
 not matched with one passing back).
@@ -88,19 +89,21 @@ def matched_cut(before: Motion, after: Motion, search_s: float = MATCH_SEARCH_S)
     before, after : Motion
         At least 2 frames each; ``before``'s frame rate sets the search's length.
     search_s : float
-        How far back from its end ``before`` may be cut (> 0).
+        How far back from its end ``before`` may be cut (> 0); it keeps at least half of
+        its frames, and at least 2.
 
     Returns
     -------
     Cut
-        The earliest frame on a tie; at least 2 frames are kept.
+        The earliest frame on a tie.
     """
     if not search_s > 0:
         raise ValueError(f"the cut's search must be longer than 0 s, not {search_s!r}")
     features = gait_features(before)
     target = gait_features(after.frames(0, min(after.n_frames, 3)))[0]
     n = before.n_frames
-    first = max(1, n - int(round(search_s * before.fps)))
+    # the last frame's candidates: within search_s of the end, in the second half
+    first = max(1, n - int(round(search_s * before.fps)), (n + 1) // 2 - 1)
     distance = np.linalg.norm(features[first:] - target, axis=1)
     best = int(np.argmin(distance))
     return Cut(stop=first + best + 1, distance_m=float(distance[best]),
