@@ -5,10 +5,14 @@ frame, a held pose); a transition of --frames new frames joins each consecutive 
 Pieces of different frame rates are resampled to the first piece's (or --fps); pieces of
 different subjects are allowed: postures are joint angles, and the result uses the first
 piece's skeleton, with each later piece's root translation scaled by the ratio of leg
-lengths.
+lengths. With --cut matched each piece but the last ends where the next one's first frame
+finds it at the same phase of the stride (the feet's positions and velocities relative
+to the pelvis), so that a walk joins a walk without the feet skating across a stride in
+the window; the pieces used are printed and reported as CLIP@A:B.
 
-Example:
+Examples:
   upm sequence 02_01@0:200 02_03@20:150 05_01@100:400 --method classnn --out seq.amc
+  upm sequence 02_01 02_02 02_01 02_02 --method linear --cut matched --out walks.amc
 """
 
 from __future__ import annotations
