@@ -7,8 +7,8 @@ different subjects are allowed: postures are joint angles, and the result uses t
 piece's skeleton, with each later piece's root translation scaled by the ratio of leg
 lengths. With --cut matched each piece but the last ends where the next one's first frame
 finds it at the same phase of the stride (the feet's positions and velocities relative
-to the pelvis), so that a walk joins a walk without the feet skating across a stride in
-the window; the pieces used are printed and reported as CLIP@A:B.
+to the pelvis), so that a walk joins a walk in step (02_01 -> 02_02: the window's fastest
+ankle 3.2 m/s instead of 5.2); the pieces used are printed and reported as CLIP@A:B.
 
 Examples:
   upm sequence 02_01@0:200 02_03@20:150 05_01@100:400 --method classnn --out seq.amc
