@@ -103,7 +103,7 @@ def _matched(pieces, refs, starts):
                          "(a held pose has no gait phase)")
     cut, cuts = matched_pieces(pieces)
     out = [ClipRef(ref.name, start, start + piece.n_frames, has_range=True)
-           for ref, piece, start in zip(refs[:-1], cut, starts, strict=False)]
+           for ref, piece, start in zip(refs[:-1], cut[:-1], starts[:-1], strict=True)]
     for ref, after, c in zip(out, refs[1:], cuts, strict=True):
         print(f"cut {ref}: its feet {c.distance_m:.2f} m from {after}'s first frame's "
               f"(at its last frame {c.whole_distance_m:.2f} m)")

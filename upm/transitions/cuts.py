@@ -14,6 +14,7 @@ not matched with one passing back).
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import NamedTuple
 
 import numpy as np
@@ -122,6 +123,6 @@ def matched_pieces(pieces: list[Motion],
         One per join (``len(pieces) - 1``).
     """
     pieces = list(pieces)
-    cuts = [matched_cut(a, b, search_s) for a, b in zip(pieces, pieces[1:], strict=False)]
-    out = [p.frames(0, cut.stop) for p, cut in zip(pieces, cuts, strict=False)]
+    cuts = [matched_cut(a, b, search_s) for a, b in pairwise(pieces)]
+    out = [p.frames(0, cut.stop) for p, cut in zip(pieces[:-1], cuts, strict=True)]
     return out + pieces[-1:], cuts
