@@ -17,8 +17,11 @@ CONTROLLERS = ("balance", "servo")
 
 
 def settings(tracking_modes=(), controller: str = "balance",
-             search_budget: float | None = None, processes: int = 1) -> dict:
-    """The thresholds and methods of the checks, JSON-ready (units in the names)."""
+             search_budget: float | None = None, processes: int = 1,
+             strength: float = 1.0) -> dict:
+    """The thresholds and methods of the checks, JSON-ready (units in the names).
+    ``strength``: the multiple of the strength tables' torque limits the model was loaded
+    with (:func:`humanoid_xml.models.load_model`)."""
     from controller.contacts import SELF_COLLISION_DEPTH_M
     from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
     from controller.tracking import FALL_FRACTION, MAX_STEP_S
@@ -29,6 +32,7 @@ def settings(tracking_modes=(), controller: str = "balance",
         "limit_tolerance_deg": LIMIT_TOLERANCE_DEG,
         "self_collision_depth_mm": 1000 * SELF_COLLISION_DEPTH_M,
         "floor_tolerance_mm": 1000 * FLOOR_TOLERANCE_M,
+        "strength": strength,
         "dynamics": {
             "lowpass_hz": LOWPASS_HZ,
             "support_distance_m": SUPPORT_DISTANCE_M,
@@ -152,7 +156,7 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
             model_path=None, controller: str = "balance", progress: bool = False,
-            search_budget: float | None = None, processes: int = 1):
+            search_budget: float | None = None, processes: int = 1, strength: float = 1.0):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -184,6 +188,9 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     processes : int
         The balance controller's processes, 1 or 2 (``controller.balance.follow``: the
         same runs, less wall time on 2 free cores).
+    strength : float
+        For the report: the multiple of the strength tables' torque limits ``model`` was
+        loaded with (:func:`humanoid_xml.models.load_model`).
 
     Returns
     -------
@@ -211,7 +218,7 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
                           settings=settings(tuple(tracking_modes), controller, search_budget,
-                                            processes),
+                                            processes, strength),
                           residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)

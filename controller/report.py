@@ -37,6 +37,9 @@ version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "
 actuator's range ``[least, largest]`` (its strength either way), and the share of the
 part's frames before any fall at which it was at either end.
 
+``settings.strength`` (added within version 2; readers of older reports take 1): every
+joint's torque limit was the strength tables' times this (``upm simulate --strength``).
+
 ``software`` names the versions the figures were computed with: a free-root run is
 deterministic on one installation, but its search takes discrete decisions, so another
 MuJoCo or numpy release can change them (and a long sequence's figures with them).

@@ -119,6 +119,8 @@ class Settings:
     cut : str
         Where a sequence's pieces but the last end: ``"whole"`` (their last frame) or
         ``"matched"`` (:func:`upm.transitions.cuts.matched_pieces`).
+    strength : float
+        Every joint's torque limit times this (:func:`humanoid_xml.models.load_model`).
     """
 
     data_dir: str
@@ -126,6 +128,7 @@ class Settings:
     offset_deg: float
     search_budget: float | None
     cut: str = "whole"
+    strength: float = 1.0
 
     def as_dict(self) -> dict:
         import hashlib
@@ -137,7 +140,7 @@ class Settings:
             the_map = f"{Path(self.map_path).name} (sha256 {digest})"
         return {"data": Path(self.data_dir).name, "map": the_map,
                 "offset_deg": self.offset_deg, "search_budget": self.search_budget,
-                "cut": self.cut}
+                "cut": self.cut, "strength": self.strength}
 
 
 class Unit(NamedTuple):
@@ -195,7 +198,7 @@ def reference(settings: Settings, row: Row, seed: int):
         sequence = build_sequence(pieces, row.method, key_source=source)
         path = catalog_model_path(catalog, refs[0].name)
         if path not in _WORKER["models"]:
-            _WORKER["models"][path] = load_model(path)
+            _WORKER["models"][path] = load_model(path, strength=settings.strength)
         _WORKER["sequences"][row] = (_WORKER["models"][path], sequence.motion)
     model, motion = _WORKER["sequences"][row]
     if seed:
@@ -390,7 +393,9 @@ def table_markdown(report: dict) -> str:
                  f"{t['offset_runs']} on references moved by N(0, {s['offset_deg']:g} deg) "
                  "per joint channel)" + (", each sequence's pieces cut where the next one's "
                                          "gait phase matches (`--cut matched`)."
-                                         if s.get("cut") == "matched" else "."))
+                                         if s.get("cut") == "matched" else ".")
+                 + (f" Every joint's torque limit x {s['strength']:g} (`--strength`)."
+                    if s.get("strength", 1) != 1 else ""))
     if t["falls"]:
         spent, other = t["falls_budget_spent"], t["falls"] - t["falls_budget_spent"]
         lines.append(f"Of the falls, {spent} came after the search had spent its budget (a "

@@ -84,15 +84,30 @@ def catalog_model_path(catalog, name: str) -> Path:
     return subject_model_path(asf)
 
 
-def load_model(path: str | os.PathLike):
-    """Compile an MJCF file (``mujoco.MjModel``), with a one-line error if it fails."""
+def load_model(path: str | os.PathLike, strength: float = 1.0):
+    """Compile an MJCF file (``mujoco.MjModel``), with a one-line error if it fails.
+
+    Parameters
+    ----------
+    path : path-like
+    strength : float
+        Every actuator's torque limit (``forcerange``) is multiplied by this (> 0): 1 is
+        the strength tables' strong adult (:mod:`humanoid_xml.strength`), 1.5 a body half
+        as strong again. The servos' gains are kept.
+    """
+    import math
+
     import mujoco
 
+    if not (math.isfinite(strength) and strength > 0):
+        raise ValueError(f"strength must be a finite number above 0, not {strength!r}")
     try:
-        return mujoco.MjModel.from_xml_path(os.fspath(path))
+        model = mujoco.MjModel.from_xml_path(os.fspath(path))
     except (ValueError, mujoco.FatalError) as exc:
         message = " ".join(str(exc).split())
         raise DataFileError(path, f"MuJoCo cannot load it: {message}") from None
+    model.actuator_forcerange[:] *= strength
+    return model
 
 
 def _safe(text: str) -> str:

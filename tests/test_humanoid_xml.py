@@ -398,3 +398,14 @@ def test_load_model_error_is_one_line(tmp_path):
     with pytest.raises(DataFileError) as info:
         humanoid_xml.load_model(bad)
     assert "bad.xml" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_load_model_multiplies_every_torque_limit_by_the_strength():
+    base = humanoid_xml.load_model(default_model_path())
+    stronger = humanoid_xml.load_model(default_model_path(), strength=1.5)
+    assert np.all(base.actuator_forcelimited == 1)
+    np.testing.assert_allclose(stronger.actuator_forcerange, 1.5 * base.actuator_forcerange)
+    np.testing.assert_array_equal(stronger.actuator_gainprm, base.actuator_gainprm)
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="strength"):
+            humanoid_xml.load_model(default_model_path(), strength=bad)

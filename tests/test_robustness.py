@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from eval.robustness import (
@@ -12,6 +13,7 @@ from eval.robustness import (
     Row,
     Settings,
     parse_row,
+    reference,
     run_robustness,
 )
 from upm.cli import main
@@ -102,6 +104,16 @@ def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     assert "marker" not in result.run(row, 1)
 
 
+def test_strength_is_a_setting_of_the_study(data_dir):
+    plain = Settings(str(data_dir), None, 0.1, None)
+    stronger = Settings(str(data_dir), None, 0.1, None, strength=1.5)
+    assert plain.as_dict()["strength"] == 1.0 and stronger.as_dict()["strength"] == 1.5
+    model, _ = reference(plain, Row(("02_01@0:60",)), 0)
+    strong_model, _ = reference(stronger, Row(("02_01@0:60",)), 0)
+    np.testing.assert_allclose(strong_model.actuator_forcerange,
+                               1.5 * model.actuator_forcerange)
+
+
 @pytest.mark.parametrize("args, message", [
     (["--rows", "02_01+"], "write CLIP"),
     (["--rows", "99_99"], "no clip '99_99'"),
@@ -109,6 +121,7 @@ def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     (["--rows", "02_01", "02_01"], "repeated"),
     (["--offset-deg", "0"], "--offset-deg"),
     (["--seeds", "-1"], "--seeds"),
+    (["--strength", "0"], "--strength 0"),
 ])
 def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     result = subprocess.run([sys.executable, "-m", "upm", "robustness", "--data",

@@ -245,6 +245,39 @@ def test_search_budget_and_offsets_are_recorded_and_checked(tmp_path, data_dir, 
         assert not (tmp_path / "x.json").exists()
 
 
+def test_strength_multiplies_every_torque_limit_the_controller_may_use(tmp_path, data_dir,
+                                                                      capsys):
+    """09_06's run meets its ankles' and hips' limits in its first half second; a body twice
+    as strong is given twice the ranges, and its controller uses torques the first body
+    does not have."""
+    by_strength = {}
+    for k in ("1", "2"):
+        out = tmp_path / f"s{k}.json"
+        assert main(["simulate", "--data", str(data_dir), "--sequence", "09_06@0:60",
+                     "--modes", "free", "--no-window-runs", "--search-budget", "0",
+                     "--processes", "1", "--strength", k, "--report", str(out)]) == 0
+        report = json.loads(out.read_text())
+        assert report["settings"]["strength"] == float(k)
+        by_strength[k] = report["totals"]["tracking"]["free"]["torque_by_actuator"]
+    assert "every joint's torque limit x 2 (--strength)" in capsys.readouterr().out
+    weak, strong = by_strength["1"], by_strength["2"]
+    assert weak.keys() == strong.keys()
+    for name in weak:
+        assert strong[name]["range_nm"] == pytest.approx([2 * v for v in weak[name]["range_nm"]],
+                                                         abs=2e-3)
+    at_limit = [n for n in weak if weak[n]["saturation_share"] > 0]
+    assert {"lfemur_rx", "rfoot_rx"} <= set(at_limit)
+    beyond = [n for n in weak if strong[n]["peak_nm"] > max(map(abs, weak[n]["range_nm"]))]
+    assert {"rfemur_rx", "rfoot_rx"} <= set(beyond)
+    for bad in ("0", "-1", "nan", "11"):
+        assert main(["simulate", "--data", str(data_dir), "--sequence", "09_06@0:60",
+                     "--modes", "free", "--strength", bad,
+                     "--report", str(tmp_path / "x.json")]) == 2
+        err = capsys.readouterr().err
+        assert f"--strength {bad}" in err and err.count("\n") == 1
+        assert not (tmp_path / "x.json").exists()
+
+
 def test_the_search_is_summed_up_in_one_line():
     from upm.commands.simulate import _search_line
 

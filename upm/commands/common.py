@@ -16,6 +16,31 @@ def add_data_argument(parser) -> None:
     )
 
 
+#: The largest --strength the commands accept.
+MAX_STRENGTH = 10.0
+
+
+def add_strength_argument(parser) -> None:
+    """``--strength K``: every joint's torque limit times K (:func:`check_strength`)."""
+    parser.add_argument(
+        "--strength", metavar="K", type=float, default=1.0,
+        help="multiply every joint's torque limit by K (default 1: the strength tables' "
+             "strong adult, mean + 2 SD of measured isometric peaks); e.g. 1.5 asks whether "
+             "a stronger body could do it")
+
+
+def check_strength(value: float) -> float:
+    """``value`` if it is a usable ``--strength``, else a :class:`upm.errors.UsageError`."""
+    import math
+
+    from upm.errors import UsageError
+
+    if not (math.isfinite(value) and 0 < value <= MAX_STRENGTH):
+        raise UsageError(f"--strength {value:g}: use a number above 0 and at most "
+                         f"{MAX_STRENGTH:g}")
+    return float(value)
+
+
 def print_json(obj) -> None:
     """Print ``obj`` as indented JSON on stdout."""
     json.dump(obj, sys.stdout, indent=2)

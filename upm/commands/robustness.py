@@ -33,7 +33,7 @@ DEFAULT_OUT = "upm-robustness"
 
 def configure(parser) -> None:
     from eval.robustness import OFFSET_DEG, OFFSET_SEEDS
-    from upm.commands.common import add_data_argument
+    from upm.commands.common import add_data_argument, add_strength_argument
 
     add_data_argument(parser)
     parser.add_argument("--rows", nargs="+", metavar="ROW", default=None,
@@ -57,6 +57,7 @@ def configure(parser) -> None:
     from upm.commands.transition import add_cut_argument
 
     add_cut_argument(parser)
+    add_strength_argument(parser)
     parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
                         help=f"output directory (default: ./{DEFAULT_OUT})")
     parser.add_argument("--workers", type=int, metavar="K", default=None,
@@ -87,6 +88,7 @@ def run(args) -> int:
         table_markdown,
     )
     from upm.catalog import Catalog
+    from upm.commands.common import check_strength
     from upm.errors import UsageError
     from upm.fileio import atomic_path
 
@@ -121,7 +123,7 @@ def run(args) -> int:
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
     settings = Settings(data_dir=str(catalog.root), map_path=args.map,
                         offset_deg=float(args.offset_deg), search_budget=args.search_budget,
-                        cut=args.cut)
+                        cut=args.cut, strength=check_strength(args.strength))
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
           f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
     from eval.executor import executor_session

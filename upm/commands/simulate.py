@@ -32,6 +32,9 @@ far under mocap's precision. --offset-deg 0.1 with a few --offset-seed values ru
 same sequence with every joint angle moved by its own small constant, to see how often an
 outcome holds.
 
+--strength K multiplies every joint's torque limit by K (default 1: the strength tables'
+strong adult): would a stronger body carry out what this one cannot?
+
 Example:
   upm simulate --map upm.npz --sequence 02_01@0:200 02_03@20:150 --report r.json --video r.mp4
 """
@@ -46,7 +49,7 @@ RENDER_CHOICES = ("driven", "free", "reference")
 
 
 def configure(parser) -> None:
-    from upm.commands.common import add_data_argument
+    from upm.commands.common import add_data_argument, add_strength_argument
     from upm.commands.transition import add_cut_argument, add_method_arguments
 
     add_data_argument(parser)
@@ -69,6 +72,7 @@ def configure(parser) -> None:
                              "up to X times the sequence's physics steps in all (default "
                              f"{_default_budget():g}; 0: no search; more carries harder "
                              "sequences through at more cost)")
+    add_strength_argument(parser)
     parser.add_argument("--offset-deg", metavar="SIGMA", type=float, default=0.0,
                         help="move every joint angle of the sequence by its own constant "
                              "drawn from N(0, SIGMA) degrees before simulating (marker "
@@ -132,9 +136,11 @@ def run(args) -> int:
     )
     from controller.report import write_report
     from humanoid_xml import catalog_model_path, load_model
+    from upm.commands.common import check_strength
     from upm.commands.transition import sequence_from_args
     from upm.errors import UsageError
 
+    strength = check_strength(args.strength)
     if (args.amc or args.control) and "free" not in args.modes:
         raise UsageError("--amc and --control need the free-root run: add free to --modes")
     if args.control and args.controller != "balance":
@@ -178,7 +184,9 @@ def run(args) -> int:
     if motion.n_frames < 2:
         raise UsageError("the sequence has fewer than 2 frames: nothing to simulate")
     model_path = catalog_model_path(catalog, refs[0].name)
-    model = load_model(model_path)
+    model = load_model(model_path, strength=strength)
+    if strength != 1:
+        print(f"every joint's torque limit x {strength:g} (--strength)")
     window_meta = [{"method": sequence.method, "from": str(refs[k]), "to": str(refs[k + 1]),
                     "compute_s": sequence.seconds[k]} for k in range(len(sequence.windows))]
     report, results = analyse(
@@ -186,7 +194,7 @@ def run(args) -> int:
         pieces=[(str(ref), part) for ref, part in zip(refs, sequence.pieces, strict=True)],
         tracking_modes=tuple(args.modes), window_free=args.window_runs,
         model_path=model_path, controller=args.controller, progress=True,
-        search_budget=args.search_budget, processes=args.processes)
+        search_budget=args.search_budget, processes=args.processes, strength=strength)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
                           "cut": args.cut,
