@@ -53,8 +53,7 @@ def settings(tracking_modes=(), controller: str = "balance",
             "free_controller_method": (
                 "reference with marker dropouts filled and standing frames on the "
                 "floor; whole-body inverse-dynamics QP per physics step (floor contacts "
-                "in friction pyramids, no root force, joint strength limits, the upper "
-                "spine's hinges weighted 3x the others), torque "
+                "in friction pyramids, no root force, joint strength limits), torque "
                 "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
                 "every 0.5 s, a backtracking search over controller modes where the "
                 "character gets into trouble; controller.balance"

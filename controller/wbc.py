@@ -4,8 +4,7 @@ Given the state (after ``mj_step1``: kinematics, inertia, bias forces, contacts)
 desired generalised acceleration ``qdd_des`` (nv,), find the acceleration ``qdd`` and the
 floor forces ``f`` that best satisfy, in weighted least squares,
 
-- ``qdd`` close to ``qdd_des`` (the root rows, the upper spine's hinge rows and the
-  other hinge rows weighted separately: :class:`Weights`);
+- ``qdd`` close to ``qdd_des`` (the root rows and the joint rows weighted separately);
 - every floor contact point kept from accelerating (``a_c = J_c qdd ~ -k v_c``, soft);
 - small forces and small torques relative to each joint's strength (regularisation);
 
@@ -80,29 +79,15 @@ _NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
 _NO_POINTS = np.zeros((0, 3))
 
 
-#: The bodies whose hinges are the upper spine's and the neck's (:attr:`Weights.upper_spine`).
-UPPER_SPINE_BODIES = ("upperback", "thorax", "lowerneck", "upperneck", "head")
-
-
 @dataclass(frozen=True)
 class Weights:
-    """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2).
-
-    ``upper_spine`` multiplies ``joints`` on the hinges of :data:`UPPER_SPINE_BODIES`. With
-    every hinge weighted alike, the QP met the pelvis's orientation (weighted
-    ``root_rotation``) partly by bending the spine, the trunk's reaction turning the pelvis,
-    and left the upper body's bodies swinging off the clip's. The lower back is left as any
-    hinge: it is the joint of the hip strategy, and weighting it as well (the whole spine
-    x3) cut the body error by a quarter to a half on most rows but made 05_01 fall in 9 of
-    21 offset runs instead of 2.
-    """
+    """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2)."""
 
     root_rotation: float = 10.0
     root_yaw: float = 1.0
     root_height: float = 3.0
     root_horizontal: float = 10.0
     joints: float = 1.0
-    upper_spine: float = 3.0
     contact: float = 100.0
     force: float = 1e-2
     torque: float = 0.3
@@ -153,11 +138,6 @@ class WholeBodyID:
                           + [self.w.root_rotation] * 2 + [self.w.root_yaw])
         self.root_w = root_w
         self.torque_scale = self.w.torque / self.strength
-        upper_spine = np.isin([model.joint(int(model.dof_jntid[d])).name.split("_")[0]
-                               for d in range(6, self.nv)], UPPER_SPINE_BODIES)
-        #: Each hinge row's weight (nv - 6,): ``joints``, times ``upper_spine`` there.
-        self.joint_w = np.where(upper_spine, self.w.joints * self.w.upper_spine,
-                                self.w.joints)
         self.actuator_of_hinge = np.argsort(self.hinge_row)
         self.tolerance = BOUND_TOLERANCE * self.strength
         self.at_bound = AT_BOUND * np.where(np.isfinite(self.strength), self.strength, 0.0)
@@ -239,7 +219,7 @@ class WholeBodyID:
         root_w = self.root_w if nc else self.root_w * w.flight_root
         P, q, G, g0, T, t0 = qp_cost_terms(
             M, h, Jc, np.asarray(data.qvel), np.asarray(qdd_des, dtype=float), self.edges,
-            self.weight_n, root_w, self.joint_w, w.contact, w.force, self.torque_scale,
+            self.weight_n, root_w, w.joints, w.contact, w.force, self.torque_scale,
             float(contact_damping))
         nl = P.shape[0] - nj
         # Warm start: the edges whose force was 0 at the last step (carried in the MuJoCo

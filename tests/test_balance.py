@@ -138,9 +138,9 @@ def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
     assert trouble.size > 0
     assert before["trouble_time_s"] == pytest.approx(trouble.size / fps)
     assert before["ends_in_trouble"] == 1.0
-    # recorded with the frame's own state: a pelvis tilted past the test is trouble there,
-    # and so is every frame after the fall, which the run goes on simulating (the
-    # character on the floor: its pelvis low)
+    # recorded with the frame's own state: a pelvis tilted past the test is trouble there
+    # (the character sits down before it falls and tips over after: the frames after the
+    # fall, which the run goes on simulating, count too)
     sim = torque_model(model02)
     data = mujoco.MjData(sim)
     pelvis = sim.jnt_bodyid[free_joint(sim)]
@@ -150,10 +150,7 @@ def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
         mujoco.mj_kinematics(sim, data)
         if data.xmat[pelvis, 8] < TROUBLE_UP:
             tilted.append(t)
-    assert run.trouble[tilted].all()
-    fallen = np.flatnonzero(np.isfinite(run.qpos[:, 0]))
-    fallen = fallen[fallen > run.fall_frame]
-    assert fallen.size > 0 and run.trouble[fallen].all()
+    assert tilted and run.trouble[tilted].all()
     # a walk it follows closely is never in trouble
     whole = window_summary(walk_run, 0, walk.n_frames)
     assert not walk_run.trouble.any()
@@ -210,27 +207,3 @@ def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_
     at_bound = (torque <= low + tol) | (torque >= high - tol)
     np.testing.assert_array_equal(run.torque_saturated[up], at_bound)
     assert 0 < at_bound.mean() < 0.2
-
-
-def test_the_trunk_keeps_the_clips_posture_on_16_15(catalog, monkeypatch):
-    """16_15 meets issue 10's targets (5 deg, 5 cm) with the QP weighing the upper spine's
-    hinges above the others: weighted as any hinge, the spine bent to turn the pelvis and
-    the upper body swung off the clip's, the body error over 6 cm on average."""
-    import functools
-
-    import controller.wbc
-    from humanoid_xml import catalog_model_path, load_model
-
-    model = load_model(catalog_model_path(catalog, "16_15"))
-    clip = catalog.load("16_15")
-    qpos = to_qpos(model, clip)
-    run = follow(model, qpos, clip.fps)
-    summary = window_summary(run, 0, clip.n_frames)
-    assert not run.fell
-    assert summary["joint_error_deg_rms"] < 5.0
-    assert summary["body_error_mm_mean"] < 50.0
-    flat = functools.partial(controller.wbc.WholeBodyID,
-                             weights=controller.wbc.Weights(upper_spine=1.0))
-    monkeypatch.setattr(controller.wbc, "WholeBodyID", flat)
-    before = window_summary(follow(model, qpos, clip.fps), 0, clip.n_frames)
-    assert before["body_error_mm_mean"] > 60.0

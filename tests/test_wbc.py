@@ -89,8 +89,8 @@ def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des):
     T[:, nj:] -= Jl[6:]
     t0 = M[6:] @ g0 + h[6:]
     scale = w.torque / solver.strength
-    rows = [root_w[:, None] * G[:6], solver.joint_w[:, None] * G[6:]]
-    rhs = [root_w * (qdd_des[:6] - g0[:6]), solver.joint_w * qdd_des[6:]]
+    rows = [root_w[:, None] * G[:6], w.joints * G[6:]]
+    rhs = [root_w * (qdd_des[:6] - g0[:6]), w.joints * qdd_des[6:]]
     if nc:
         rows += [w.contact * (Jc @ G), np.hstack([np.zeros((nl, nj)), w.force * np.eye(nl)])]
         rhs += [w.contact * (-CONTACT_DAMPING * (Jc @ qvel) - Jc @ g0), np.zeros(nl)]
@@ -142,7 +142,7 @@ def test_compiled_terms_are_the_documented_least_squares(states):
         root_w = solver.root_w if Jc.shape[0] else solver.root_w * w.flight_root
         P, q, C, d, G_, g0_, T_, t0_ = qp_terms(
             M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n, root_w,
-            solver.joint_w, w.contact, w.force, solver.torque_scale, CONTACT_DAMPING,
+            w.joints, w.contact, w.force, solver.torque_scale, CONTACT_DAMPING,
             solver.low, solver.high)
         P_ref = A.T @ A + 1e-9 * np.eye(A.shape[1])
         np.testing.assert_allclose(P, P_ref, rtol=1e-9, atol=1e-9 * np.abs(P_ref).max())
@@ -231,7 +231,7 @@ def test_a_wrong_active_set_is_refused(states):
         w = solver.w
         P, q, C, d, G, g0, T, t0 = qp_terms(
             M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n,
-            solver.root_w, solver.joint_w, w.contact, w.force, solver.torque_scale,
+            solver.root_w, w.joints, w.contact, w.force, solver.torque_scale,
             CONTACT_DAMPING, solver.low, solver.high)
         nl = P.shape[0] - (solver.nv - 6)
         want = _cold_minimiser(solver, data, qdd_des, exclude)[solver.actuator_of_hinge]
