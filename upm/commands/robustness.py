@@ -104,6 +104,7 @@ def run(args) -> int:
                                                and 0 <= args.search_budget <= 1000):
         raise UsageError(f"--search-budget {args.search_budget:g}: use a number from 0 to "
                          "1000")
+    strength = check_strength(args.strength)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be at least 1, not {args.workers}")
     if args.address and args.executor != "ray":
@@ -123,7 +124,7 @@ def run(args) -> int:
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
     settings = Settings(data_dir=str(catalog.root), map_path=args.map,
                         offset_deg=float(args.offset_deg), search_budget=args.search_budget,
-                        cut=args.cut, strength=check_strength(args.strength))
+                        cut=args.cut, strength=strength)
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
           f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
     from eval.executor import executor_session
