@@ -250,6 +250,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         actuator_names=tuple(mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
                              for i in range(sim.nu)),
         torque_range_nm=torque_range_nm,
+        actuator_velocity=log.actuator_velocity,
     )
 
 

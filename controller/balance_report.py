@@ -113,17 +113,27 @@ class BalanceTracking:
 
     def _by_actuator(self, up) -> dict:
         """Each actuator's torque over frames ``up``: its peak and mean magnitude, its
-        range (its strength either way), and the share of the frames it was at either end
-        (JSON-ready; empty for a run without actuator names)."""
+        range (its strength either way), the share of the frames it was at either end,
+        and of those the share at which the joint turned the way the torque pushed
+        (``saturated_concentric_share``: positive work, concentric, the muscles across it
+        shortening; None when never at either end or not recorded). JSON-ready; empty for
+        a run without actuator names."""
         run = self.run
         if not run.actuator_names or not up.size:
             return {}
         torque = np.abs(run.torque_nm[up])
         peak, mean = torque.max(axis=0), torque.mean(axis=0)
-        share = run.torque_saturated[up].mean(axis=0)
+        saturated = run.torque_saturated[up]
+        share = saturated.mean(axis=0)
+        shortening = [None] * len(run.actuator_names)
+        if run.actuator_velocity is not None:
+            power = run.torque_nm[up] * run.actuator_velocity[up]
+            for i in np.flatnonzero(saturated.any(axis=0)):
+                shortening[i] = round(float(np.mean(power[saturated[:, i], i] > 0.0)), 5)
         return {name: {"peak_nm": round(float(peak[i]), 3), "mean_nm": round(float(mean[i]), 3),
                        "range_nm": [round(float(x), 3) for x in run.torque_range_nm[i]],
-                       "saturation_share": round(float(share[i]), 5)}
+                       "saturation_share": round(float(share[i]), 5),
+                       "saturated_concentric_share": shortening[i]}
                 for i, name in enumerate(run.actuator_names)}
 
     def run_summary(self) -> dict:

@@ -21,7 +21,12 @@ Per-frame figures (:class:`BalanceRun`):
   step, and whether the controller asked for the joint's whole strength or more (the QP
   keeps its torques within the strength, so a bound it leans on is met to rounding:
   within :data:`controller.wbc.AT_BOUND` of the strength counts as at it, the share the
-  QP's warm start also reads a bound from).
+  QP's warm start also reads a bound from);
+- ``actuator_velocity``: each actuator's joint velocity at the same step, rad/s: a
+  torque that has the velocity's sign does positive work (the joint turns the way it is
+  pushed: a muscle across it shortens, where a real one holds less than its isometric
+  peak, the strength tables' figure), one against it negative work (the muscle
+  lengthens, where it holds more).
 
 The applied torques of every step are recorded (``BalanceRun.ctrl``): :func:`replay`
 runs them open-loop from the same start and reproduces the run.
@@ -116,6 +121,9 @@ class BalanceRun:
     torque_range_nm : ndarray, shape (nu, 2)
         Each actuator's strength: the least and the largest torque it can apply, N m (a
         joint is stronger one way than the other).
+    actuator_velocity : ndarray, shape (T, nu)
+        Each actuator's joint velocity at the step of ``torque_nm``, rad/s (0 at the
+        first frame, NaN after the run stopped); None where not recorded.
     """
 
     fps: float
@@ -155,6 +163,7 @@ class BalanceRun:
     troubles: tuple = ()
     actuator_names: tuple = ()
     torque_range_nm: np.ndarray | None = None
+    actuator_velocity: np.ndarray | None = None
 
     @property
     def steps(self) -> int:
@@ -289,6 +298,7 @@ class FrameLog:
         self.qpos = np.full((n_frames, sim.nq), np.nan)
         self.contact_force_n = np.full(n_frames, np.nan)
         self.torque_nm = np.full((n_frames, sim.nu), np.nan)
+        self.actuator_velocity = np.full((n_frames, sim.nu), np.nan)
         self.torque_saturated = np.zeros((n_frames, sim.nu), dtype=bool)
         self.limit_rows = np.zeros(n_frames, dtype=int)
         self.self_contacts = np.zeros(n_frames, dtype=int)
@@ -301,6 +311,7 @@ class FrameLog:
         self.qpos[0] = data.qpos
         self.contact_force_n[0] = floor_normal_force(self.sim, data)
         self.torque_nm[0] = 0.0
+        self.actuator_velocity[0] = 0.0
 
     def planned(self, t: int, tau_nm: np.ndarray) -> None:
         """The torques the QP planned at frame ``t``'s last step, (nu,)."""
@@ -314,6 +325,8 @@ class FrameLog:
         self.trouble[t] = troubled
         self.contact_force_n[t] = floor_normal_force(sim, data)
         self.torque_nm[t] = data.actuator_force
+        # computed with the forces of the step's start, as actuator_force was
+        self.actuator_velocity[t] = data.actuator_velocity
         self.external_force_peak = max(self.external_force_peak,
                                        float(np.abs(data.xfrc_applied).max()))
         self.limit_rows[t] = int(np.count_nonzero(data.efc_type[:data.nefc] == self._limit_type))
@@ -326,6 +339,7 @@ class FrameLog:
         self.qpos[stop_frame:] = np.nan
         self.contact_force_n[stop_frame:] = np.nan
         self.torque_nm[stop_frame:] = np.nan
+        self.actuator_velocity[stop_frame:] = np.nan
         self.torque_saturated[stop_frame:] = False
         self.limit_rows[stop_frame:] = 0
         self.self_contacts[stop_frame:] = 0

@@ -33,9 +33,13 @@ run's figures (``totals.tracking.free``) also list ``search_troubles`` (added wi
 version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "retries",
 "rerun_s", "outcome"}`` (:class:`controller.balance_search.SearchTrouble`); and every part's,
 ``torque_by_actuator`` (added within version 2; JSON only): per actuator ``{"peak_nm",
-"mean_nm", "range_nm", "saturation_share"}``: the torque's largest and mean magnitude, the
-actuator's range ``[least, largest]`` (its strength either way), and the share of the
-part's frames before any fall at which it was at either end.
+"mean_nm", "range_nm", "saturation_share", "saturated_concentric_share"}``: the torque's
+largest and mean magnitude, the actuator's range ``[least, largest]`` (its strength either
+way), the share of the part's frames before any fall at which it was at either end, and,
+of those frames, the share at which the joint turned the way its torque pushed (positive
+work: the muscles across it shortening, where a real muscle holds less than the isometric
+peak the strength is; ``null`` when the joint was never at its strength; the last key
+added within version 2, missing from older reports).
 
 ``settings.strength`` (added within version 2; readers of older reports take 1): every
 joint's torque limit was the strength tables' times this (``upm simulate --strength``).

@@ -207,3 +207,33 @@ def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_
     at_bound = (torque <= low + tol) | (torque >= high - tol)
     np.testing.assert_array_equal(run.torque_saturated[up], at_bound)
     assert 0 < at_bound.mean() < 0.2
+
+
+def test_the_joint_velocity_is_recorded_with_the_torque(model02, walk_run):
+    """Each actuator's velocity is its joint's, at the step its torque was applied: it
+    follows the simulated angles' own rate, and the report's concentric share of the
+    frames at full strength is the share at which torque and velocity have one sign."""
+    from controller.balance_report import BalanceTracking
+
+    run = walk_run
+    sim = torque_model(model02)
+    adr = sim.jnt_qposadr[sim.actuator_trnid[:, 0]]
+    angle = run.qpos[:, adr]
+    rate = (angle[2:] - angle[:-2]) * run.fps / 2.0  # central differences, rad/s
+    velocity = run.actuator_velocity[1:-1]
+    assert np.all(np.isfinite(velocity)) and np.all(run.actuator_velocity[0] == 0.0)
+    # the step's velocity against the frame's rate: the same motion to the frame's blur
+    assert np.corrcoef(velocity.ravel(), rate.ravel())[0, 1] > 0.99
+    assert np.median(np.abs(velocity - rate)) < 0.1 * np.median(np.abs(rate))
+    by_actuator = BalanceTracking(run).run_summary()["torque_by_actuator"]
+    power = run.torque_nm * run.actuator_velocity
+    seen = 0
+    for i, name in enumerate(run.actuator_names):
+        saturated = run.torque_saturated[:, i]
+        got = by_actuator[name]["saturated_concentric_share"]
+        if not saturated.any():
+            assert got is None
+            continue
+        seen += 1
+        assert got == pytest.approx(np.mean(power[saturated, i] > 0), abs=1e-5)
+    assert seen > 0

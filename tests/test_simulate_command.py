@@ -166,7 +166,11 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
         assert 0 <= a["mean_nm"] <= a["peak_nm"] <= max(-low, high) + 1e-3, name
         # at full strength: at one end of the range, to the QP's rounding
         assert a["saturation_share"] == 0 or a["peak_nm"] > 0.99 * min(-low, high), name
-    assert ("at full strength most often: " in printed) == (max(shares) > 0)
+        # of the frames at full strength, the share with the joint turning its way
+        concentric = a["saturated_concentric_share"]
+        assert (concentric is None) == (a["saturation_share"] == 0), name
+        assert concentric is None or 0 <= concentric <= 1, name
+    assert ("at full strength most often" in printed) == (max(shares) > 0)
     assert "torque_by_actuator" not in out.with_suffix(".csv").read_text()
     assert window["tracking"]["free"]["error_deg_rms"] < 15.0
     assert window["tracking"]["free"]["body_error_mm_mean"] < 100.0
@@ -303,6 +307,12 @@ def test_the_joints_most_often_at_full_strength_in_one_line():
         "  at full strength most often: lfemur_rx 18.4 %, rfoot_rx 12.8 %, lfoot_rx 11.3 % "
         "of the frames")
     assert _strength_line({"ltoes_rx": by_actuator["ltoes_rx"]}) == ""
+    for name, concentric in (("lfemur_rx", 0.1212), ("rfoot_rx", 0.33), ("lfoot_rx", 0.3125)):
+        by_actuator[name]["saturated_concentric_share"] = concentric
+    assert _strength_line(by_actuator) == (
+        "  at full strength most often (share of the frames; of those, concentric: the joint "
+        "turning the way it pushes): lfemur_rx 18.4 % (12 %), rfoot_rx 12.8 % (33 %), "
+        "lfoot_rx 11.3 % (31 %)")
 
 
 def test_cut_matched_drives_the_pieces_it_cut(tmp_path, data_dir, capsys):

@@ -279,14 +279,22 @@ def _search_line(troubles: list) -> str:
 
 
 def _strength_line(by_actuator: dict, most: int = 3) -> str:
-    """The actuators most often at their strength, in one line ("" when none is)."""
+    """The actuators most often at their strength, in one line ("" when none is), each
+    with the share of those frames at which its joint turned the way it pushed
+    (concentric: where a real muscle holds less than its isometric strength)."""
     at = sorted(((v["saturation_share"], name) for name, v in by_actuator.items()
                  if v["saturation_share"] > 0), reverse=True)[:most]
     if not at:
         return ""
-    return ("  at full strength most often: "
-            + ", ".join(f"{name} {100 * share:.1f} %" for share, name in at)
-            + " of the frames")
+    concentric = [by_actuator[name].get("saturated_concentric_share") for _, name in at]
+    if any(c is None for c in concentric):
+        return ("  at full strength most often: "
+                + ", ".join(f"{name} {100 * share:.1f} %" for share, name in at)
+                + " of the frames")
+    return ("  at full strength most often (share of the frames; of those, concentric: the "
+            "joint turning the way it pushes): "
+            + ", ".join(f"{name} {100 * share:.1f} % ({100 * c:.0f} %)"
+                        for (share, name), c in zip(at, concentric, strict=True)))
 
 
 def _print_summary(report: dict, json_path, csv_path) -> None:
