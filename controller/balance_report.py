@@ -125,15 +125,17 @@ class BalanceTracking:
         peak, mean = torque.max(axis=0), torque.mean(axis=0)
         saturated = run.torque_saturated[up]
         share = saturated.mean(axis=0)
-        shortening = [None] * len(run.actuator_names)
+        concentric = [None] * len(run.actuator_names)
         if run.actuator_velocity is not None:
-            power = run.torque_nm[up] * run.actuator_velocity[up]
-            for i in np.flatnonzero(saturated.any(axis=0)):
-                shortening[i] = round(float(np.mean(power[saturated[:, i], i] > 0.0)), 5)
+            positive = run.torque_nm[up] * run.actuator_velocity[up] > 0.0
+            frames = saturated.sum(axis=0)
+            shares = (positive & saturated).sum(axis=0) / np.maximum(frames, 1)
+            concentric = [round(float(c), 5) if n else None
+                          for c, n in zip(shares, frames, strict=True)]
         return {name: {"peak_nm": round(float(peak[i]), 3), "mean_nm": round(float(mean[i]), 3),
                        "range_nm": [round(float(x), 3) for x in run.torque_range_nm[i]],
                        "saturation_share": round(float(share[i]), 5),
-                       "saturated_concentric_share": shortening[i]}
+                       "saturated_concentric_share": concentric[i]}
                 for i, name in enumerate(run.actuator_names)}
 
     def run_summary(self) -> dict:

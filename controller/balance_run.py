@@ -325,7 +325,7 @@ class FrameLog:
         self.trouble[t] = troubled
         self.contact_force_n[t] = floor_normal_force(sim, data)
         self.torque_nm[t] = data.actuator_force
-        # computed with the forces of the step's start, as actuator_force was
+        # from the last step's forward pass, as actuator_force is
         self.actuator_velocity[t] = data.actuator_velocity
         self.external_force_peak = max(self.external_force_peak,
                                        float(np.abs(data.xfrc_applied).max()))
