@@ -20,7 +20,10 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
    root's horizontal position not at all, only its velocity (the character may drift from
    the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
 4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
-   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`);
+   no force on the root and each joint's torque range (:class:`controller.wbc.WholeBodyID`),
+   in the default mode holding the spine to the clip's posture while the character's
+   capture offset is near the reference's (:data:`SPINE_HELD_M`: the trunk is left free to
+   balance the body where it is not, and in the search's other modes);
 5. applies the joint torques through torque actuators: the model is used with its position
    servos turned into torque motors of the same strength (:func:`torque_model`). The root
    has no actuator and ``xfrc_applied`` is never written.
@@ -45,6 +48,7 @@ from controller.kernels import (
     desired_acceleration,
     reference_at,
 )
+from controller.placement import capture_error_m
 
 #: Natural frequencies of the tracking (Hz) and damping ratio.
 JOINT_HZ = 5.0
@@ -65,19 +69,29 @@ class Mode(NamedTuple):
     placement_gain: float
     swing_contacts_excluded: str
     swing_clearance_m: float
+    spine_held: bool
 
 
 #: The controller's modes, tried in this order where the default leads to trouble: the
 #: foot-placement gain, which floor contacts of the foot the reference has in the air are
 #: not planned as support ("none"; "swing toes": a swing toe that scrapes the floor is not
 #: pinned to it; "foot": no contact of that foot), the swing ankle's clearance above the
-#: reference's, metres (:mod:`controller.placement`). The first is the default. In every
-#: mode a toe pressed on the floor lies flat (:meth:`BalanceControl._flatten_toes`).
-MODES = (Mode(0.3, "none", 0.0), Mode(0.3, "none", 0.04), Mode(0.6, "none", 0.02),
-         Mode(0.3, "swing toes", 0.04), Mode(0.6, "swing toes", 0.04), Mode(0.3, "foot", 0.04))
+#: reference's, metres (:mod:`controller.placement`), whether the spine is held to the
+#: clip's posture while the character's capture offset is near the reference's
+#: (:data:`SPINE_HELD_M`; where it is not, the hips and the trunk are left to balance
+#: the body). The first is the default. In every mode a toe pressed on the floor lies
+#: flat (:meth:`BalanceControl._flatten_toes`).
+MODES = (Mode(0.3, "none", 0.0, True), Mode(0.3, "none", 0.04, False),
+         Mode(0.6, "none", 0.02, False), Mode(0.3, "swing toes", 0.04, False),
+         Mode(0.6, "swing toes", 0.04, False), Mode(0.3, "foot", 0.04, False))
 #: A toe hinge that turns the toe's axis up or down slower than this (per radian, near a
 #: vertical hinge) is not flattened.
 MIN_TOE_PITCH_RATE = 0.2
+#: The spine is held to the clip's posture (:attr:`controller.wbc.Weights.spine`) while
+#: the character's capture offset is within SPINE_HELD_M of the reference's, left free
+#: from SPINE_FREE_M, linearly between (:func:`controller.placement.capture_error_m`).
+SPINE_HELD_M = 0.20
+SPINE_FREE_M = 0.40
 #: Correct the swing foot's placement (:mod:`controller.placement`).
 PLACEMENT = True
 #: Keep a foot in the air at the reference's tilt (:mod:`controller.foot_tilt`).
@@ -185,13 +199,24 @@ class BalanceControl:
         self._mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
         desired_acceleration(qdd_ref, self.kp, self.err, self.kd, qd_ref, data.qvel,
                              MAX_ACCELERATION, self.qdd_des)
+        held = self._spine_held(data) if mode.spine_held else 0.0
         tau = self.solver.torques(
             data, self.qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame),
-            floor=floor)
+            floor=floor, spine_held=held)
         applied = clip_torques(tau, self.low_nm, self.high_nm)
         data.ctrl[:] = applied
         self._mj_step2(sim, data)
         return applied, tau
+
+    @staticmethod
+    def _spine_held(data) -> float:
+        """How firmly the spine is held to the clip's posture, 0 to 1, by the difference
+        between the character's and the reference's capture offsets (the state's)."""
+        error = capture_error_m(data)
+        if not error.size:
+            return 0.0
+        return min(1.0, max(0.0, (SPINE_FREE_M - float(error[0]))
+                            / (SPINE_FREE_M - SPINE_HELD_M)))
 
     def _flatten_toes(self, data, q_ref, floor_bodies) -> None:
         """A toe pressed on the floor yields until it lies flat: its target in ``q_ref``

@@ -58,7 +58,9 @@ def qp_cost_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_
         The body's weight, N (edge magnitudes are in body weights).
     root_w : ndarray, shape (6,)
         Weights of the root rows (already reduced when nothing touches the floor).
-    w_joints, w_contact, w_force : float
+    w_joints : ndarray, shape (nv - 6,)
+        Weight of each hinge's acceleration row.
+    w_contact, w_force : float
     torque_scale : ndarray, shape (nv - 6,)
         Weight of each hinge's torque per N m (the torque weight over its strength).
     contact_damping : float
@@ -108,8 +110,8 @@ def qp_cost_terms(M, h, Jc, qvel, qdd_des, edges, weight_n, root_w, w_joints, w_
     P = R.T @ R
     rb = root_w * (qdd_des[:6] - g0[:6])
     q = R.T @ rb
-    wj2 = w_joints * w_joints
     for j in range(nj):
+        wj2 = w_joints[j] * w_joints[j]
         P[j, j] += wj2
         q[j] += wj2 * qdd_des[6 + j]
     if nc:

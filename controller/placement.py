@@ -184,11 +184,14 @@ class FootPlacement:
         # the reference's stance foot where the reference has it down, at the frame
         # nearest this one (a foot the character put down early or lifted late is
         # compared with where the reference lands it or last stood on it)
+        gain = self.gain if gain is None else gain
         shift = capture_shift(
             data.subtree_com[1], data.subtree_linvel[1], xpos[self.ankle[stance]],
             self.ref_com[frame], self.ref_com_vel[frame],
             self.ref_ankle[self.down_frame[frame, stance], stance], self.time_constant_s,
-            self.gain if gain is None else gain, MAX_SHIFT_M)
+            gain, MAX_SHIFT_M)
+        if gain:
+            capture_error_m(data)[:] = math.hypot(shift[0], shift[1]) / gain
         dofs, qadr = self.hips[swing]
         self._mj_jac(self.model, data, self._jacp, None, xpos[self.ankle[swing]],
                      int(self.ankle[swing]))
@@ -212,3 +215,12 @@ def _descends(model, body: int, ancestor: int) -> bool:
             return True
         body = int(model.body_parentid[body])
     return False
+
+
+def capture_error_m(data) -> np.ndarray:
+    """The state's slot (a view, shape (1,) or (0,)) for the length of the difference
+    between the character's and the reference's capture offsets at the last
+    single-support step, m (at most ``MAX_SHIFT_M`` over that step's placement gain):
+    the last entry of ``userdata``, so that a saved state and a rollout from it carry
+    it."""
+    return data.userdata[-1:]

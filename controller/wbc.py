@@ -4,7 +4,9 @@ Given the state (after ``mj_step1``: kinematics, inertia, bias forces, contacts)
 desired generalised acceleration ``qdd_des`` (nv,), find the acceleration ``qdd`` and the
 floor forces ``f`` that best satisfy, in weighted least squares,
 
-- ``qdd`` close to ``qdd_des`` (the root rows and the joint rows weighted separately);
+- ``qdd`` close to ``qdd_des`` (the root rows and the joint rows weighted separately; the
+  spine's and neck's rows more while the controller holds the trunk to the clip's posture,
+  :meth:`WholeBodyID.joint_weights`);
 - every floor contact point kept from accelerating (``a_c = J_c qdd ~ -k v_c``, soft);
 - small forces and small torques relative to each joint's strength (regularisation);
 
@@ -79,6 +81,10 @@ _NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
 _NO_POINTS = np.zeros((0, 3))
 
 
+#: The bodies whose hinges are the spine's and the neck's (:attr:`Weights.spine`).
+SPINE_BODIES = ("lowerback", "upperback", "thorax", "lowerneck", "upperneck", "head")
+
+
 @dataclass(frozen=True)
 class Weights:
     """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2)."""
@@ -88,6 +94,7 @@ class Weights:
     root_height: float = 3.0
     root_horizontal: float = 10.0
     joints: float = 1.0
+    spine: float = 3.0
     contact: float = 100.0
     force: float = 1e-2
     torque: float = 0.3
@@ -138,6 +145,10 @@ class WholeBodyID:
                           + [self.w.root_rotation] * 2 + [self.w.root_yaw])
         self.root_w = root_w
         self.torque_scale = self.w.torque / self.strength
+        names = [model.joint(int(model.dof_jntid[d])).name.split("_")[0]
+                 for d in range(6, self.nv)]
+        self.spine_rows = np.flatnonzero(np.isin(names, SPINE_BODIES))
+        self.joint_w = np.full(self.nv - 6, self.w.joints)
         self.actuator_of_hinge = np.argsort(self.hinge_row)
         self.tolerance = BOUND_TOLERANCE * self.strength
         self.at_bound = AT_BOUND * np.where(np.isfinite(self.strength), self.strength, 0.0)
@@ -194,11 +205,18 @@ class WholeBodyID:
         normal = float(np.sum(lam) * self.edges[0, 2] * self.weight_n) if nc else 0.0
         return tau, qdd, normal
 
-    def torques(self, data, qdd_des, exclude=(), floor=None):
+    def torques(self, data, qdd_des, exclude=(), floor=None, spine_held: float = 0.0):
         """The torques of :meth:`solve` alone (nu,), at the default contact damping."""
-        return self._plan(data, qdd_des, None, exclude, floor)[0]
+        return self._plan(data, qdd_des, None, exclude, floor, spine_held)[0]
 
-    def _plan(self, data, qdd_des, contact_damping, exclude, floor):
+    def joint_weights(self, spine_held: float) -> np.ndarray:
+        """Each hinge acceleration row's weight (nv - 6,): ``joints``, the spine's and
+        neck's hinges (:data:`SPINE_BODIES`) times ``1 + (spine - 1) spine_held``."""
+        w = self.joint_w.copy()
+        w[self.spine_rows] *= 1.0 + (self.w.spine - 1.0) * spine_held
+        return w
+
+    def _plan(self, data, qdd_des, contact_damping, exclude, floor, spine_held=0.0):
         """:meth:`solve`'s QP: ``(tau (nu,), x (n,), G (nv, n), g0 (nv,), contacts)``."""
         if contact_damping is None:
             contact_damping = CONTACT_DAMPING
@@ -219,7 +237,8 @@ class WholeBodyID:
         root_w = self.root_w if nc else self.root_w * w.flight_root
         P, q, G, g0, T, t0 = qp_cost_terms(
             M, h, Jc, np.asarray(data.qvel), np.asarray(qdd_des, dtype=float), self.edges,
-            self.weight_n, root_w, w.joints, w.contact, w.force, self.torque_scale,
+            self.weight_n, root_w, self.joint_weights(spine_held), w.contact, w.force,
+            self.torque_scale,
             float(contact_damping))
         nl = P.shape[0] - nj
         # Warm start: the edges whose force was 0 at the last step (carried in the MuJoCo
@@ -227,7 +246,7 @@ class WholeBodyID:
         # hinges whose applied torque is at a bound are guessed to be the active set; the
         # guess is right when the KKT conditions hold (the QP's minimiser, at about a
         # quarter of the cost), else the QP is solved from scratch.
-        memory = data.userdata
+        memory = data.userdata[:-1] if data.userdata.shape[0] else data.userdata
         x = None
         if nl:
             fixed, known = recall_active(memory, geoms)

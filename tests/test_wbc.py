@@ -13,6 +13,7 @@ import quadprog
 
 from controller import to_qpos
 from controller.balance import follow
+from controller.balance_control import SPINE_FREE_M, SPINE_HELD_M, BalanceControl
 from controller.contacts import floor_contacts
 from controller.kernels import (
     damped_least_squares,
@@ -21,23 +22,26 @@ from controller.kernels import (
     remember_active,
     solve_active_set,
 )
-from controller.placement import FootPlacement
+from controller.placement import FootPlacement, capture_error_m
 from controller.wbc import (
     CONTACT_DAMPING,
     FORCE_TOLERANCE,
     MULTIPLIER_TOLERANCE,
+    SPINE_BODIES,
     WholeBodyID,
 )
 
 
 @pytest.fixture(scope="module")
-def states(model02, walk):
-    """(solver, data copy, qdd_des, exclude) at every 7th control step of 1 s of 02_01."""
-    captured = []
+def captured_run(model02, walk):
+    """``(states, spine_held)``: (solver, data copy, qdd_des, exclude) at every 7th
+    control step of 1 s of 02_01, and how firmly the spine was held at every step."""
+    captured, held = [], []
     calls = [0]
     torques = WholeBodyID.torques
 
-    def spy(self, data, qdd_des, exclude=(), floor=None):
+    def spy(self, data, qdd_des, exclude=(), floor=None, spine_held=0.0):
+        held.append(spine_held)
         # every 7th step only: an MjData holds a 16 MB arena, and a process holding
         # hundreds of them cannot fork the balance controller's helper in later tests
         if calls[0] % 7 == 0:
@@ -45,14 +49,28 @@ def states(model02, walk):
             mujoco.mj_copyData(copy, self.model, data)
             captured.append((self, copy, np.array(qdd_des), exclude))
         calls[0] += 1
-        return torques(self, data, qdd_des, exclude, floor)
+        return torques(self, data, qdd_des, exclude, floor, spine_held)
 
     qpos = to_qpos(model02, walk)[:121]
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(WholeBodyID, "torques", spy)
         run = follow(model02, qpos, walk.fps, search_budget=0)
     assert not run.fell
-    return captured
+    return captured, np.array(held)
+
+
+@pytest.fixture(scope="module")
+def states(captured_run):
+    return captured_run[0]
+
+
+def _documented_joint_weights(solver, spine_held):
+    """Each hinge row's weight as the module documents it, from the joints' names."""
+    w = solver.w
+    bodies = [solver.model.joint(int(solver.model.dof_jntid[d])).name.split("_")[0]
+              for d in range(6, solver.nv)]
+    return np.array([w.joints * (1.0 + (w.spine - 1.0) * spine_held)
+                     if body in SPINE_BODIES else w.joints for body in bodies])
 
 
 def _terms(solver, data, exclude):
@@ -69,7 +87,7 @@ def _terms(solver, data, exclude):
     return M, h, Jc
 
 
-def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des):
+def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des, spine_held=0.0):
     """A and b of the rows listed in controller.wbc, and qdd = G x + g0, tau = T x + t0."""
     w, nv = solver.w, solver.nv
     nj, nc = nv - 6, Jc.shape[0] // 3
@@ -89,14 +107,28 @@ def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des):
     T[:, nj:] -= Jl[6:]
     t0 = M[6:] @ g0 + h[6:]
     scale = w.torque / solver.strength
-    rows = [root_w[:, None] * G[:6], w.joints * G[6:]]
-    rhs = [root_w * (qdd_des[:6] - g0[:6]), w.joints * qdd_des[6:]]
+    joint_w = _documented_joint_weights(solver, spine_held)
+    rows = [root_w[:, None] * G[:6], joint_w[:, None] * G[6:]]
+    rhs = [root_w * (qdd_des[:6] - g0[:6]), joint_w * qdd_des[6:]]
     if nc:
         rows += [w.contact * (Jc @ G), np.hstack([np.zeros((nl, nj)), w.force * np.eye(nl)])]
         rhs += [w.contact * (-CONTACT_DAMPING * (Jc @ qvel) - Jc @ g0), np.zeros(nl)]
     rows.append(scale[:, None] * T)
     rhs.append(-scale * t0)
     return np.vstack(rows), np.concatenate(rhs), G, g0, T, t0
+
+
+def test_the_spine_is_held_while_the_walk_keeps_to_its_capture_offset(captured_run, model02):
+    """On 02_01 the character's capture offset stays near the reference's: the spine is
+    held at every step (weight ``spine``); it is eased off linearly as the offsets part
+    (the difference carried in the state), and free from SPINE_FREE_M."""
+    assert np.all(captured_run[1] == 1.0)
+    data = mujoco.MjData(model02)
+    held = []
+    for error in (0.0, SPINE_HELD_M, 0.5 * (SPINE_HELD_M + SPINE_FREE_M), SPINE_FREE_M, 1.0):
+        capture_error_m(data)[:] = error
+        held.append(BalanceControl._spine_held(data))
+    assert held == pytest.approx([1.0, 1.0, 0.5, 0.0, 0.0])
 
 
 def test_states_have_contacts_and_flight_free_steps(states):
@@ -135,15 +167,16 @@ def _descends(model, body, ancestor):
 
 
 def test_compiled_terms_are_the_documented_least_squares(states):
-    for solver, data, qdd_des, exclude in states:
+    for i, (solver, data, qdd_des, exclude) in enumerate(states):
+        held = (i % 3) / 2.0  # the spine free, half held, held
         M, h, Jc = _terms(solver, data, exclude)
-        A, b, G, g0, T, t0 = _least_squares_rows(solver, M, h, Jc, data.qvel, qdd_des)
+        A, b, G, g0, T, t0 = _least_squares_rows(solver, M, h, Jc, data.qvel, qdd_des, held)
         w = solver.w
         root_w = solver.root_w if Jc.shape[0] else solver.root_w * w.flight_root
         P, q, C, d, G_, g0_, T_, t0_ = qp_terms(
             M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n, root_w,
-            w.joints, w.contact, w.force, solver.torque_scale, CONTACT_DAMPING,
-            solver.low, solver.high)
+            solver.joint_weights(held), w.contact, w.force, solver.torque_scale,
+            CONTACT_DAMPING, solver.low, solver.high)
         P_ref = A.T @ A + 1e-9 * np.eye(A.shape[1])
         np.testing.assert_allclose(P, P_ref, rtol=1e-9, atol=1e-9 * np.abs(P_ref).max())
         np.testing.assert_allclose(q, A.T @ b, rtol=1e-9, atol=1e-9 * np.abs(A.T @ b).max())
@@ -231,8 +264,8 @@ def test_a_wrong_active_set_is_refused(states):
         w = solver.w
         P, q, C, d, G, g0, T, t0 = qp_terms(
             M, h, Jc, data.qvel.copy(), qdd_des, solver.edges, solver.weight_n,
-            solver.root_w, w.joints, w.contact, w.force, solver.torque_scale,
-            CONTACT_DAMPING, solver.low, solver.high)
+            solver.root_w, solver.joint_weights(0.0), w.contact, w.force,
+            solver.torque_scale, CONTACT_DAMPING, solver.low, solver.high)
         nl = P.shape[0] - (solver.nv - 6)
         want = _cold_minimiser(solver, data, qdd_des, exclude)[solver.actuator_of_hinge]
         x_cold = quadprog.solve_qp(P, q, C, d, 0)
