@@ -131,6 +131,46 @@ def test_the_spine_is_held_while_the_walk_keeps_to_its_capture_offset(captured_r
     assert held == pytest.approx([1.0, 1.0, 0.5, 0.0, 0.0])
 
 
+def test_a_mode_without_the_hold_leaves_the_spine_free(model02, walk, monkeypatch):
+    """The hold acts only through the spine's rows and only in a mode that asks for it:
+    with the default mode's flag off, every step asks for none, and the run is the one of
+    a spine weighted like every hinge (the search's other modes are such runs)."""
+    from dataclasses import replace
+
+    from controller import balance, balance_control, gain_selection, wbc
+
+    qpos = to_qpos(model02, walk)[:61]
+    free = balance_control.MODES[0]._replace(spine_held=False)
+    assert [m.spine_held for m in balance_control.MODES] == [True] + [False] * 5
+    asked = []
+    torques = WholeBodyID.torques
+
+    def spy(self, data, qdd_des, exclude=(), floor=None, spine_held=0.0):
+        asked.append(spine_held)
+        return torques(self, data, qdd_des, exclude, floor, spine_held)
+
+    with monkeypatch.context() as patch:
+        patch.setattr(WholeBodyID, "torques", spy)
+        for module in (balance, gain_selection):
+            patch.setattr(module, "MODES", (free,) + balance_control.MODES[1:])
+        unheld = follow(model02, qpos, walk.fps, search_budget=0)
+    assert asked and not any(asked)
+    even = replace(wbc.Weights(), spine=wbc.Weights().joints)
+    with monkeypatch.context() as patch:
+        patch.setattr(WholeBodyID, "__init__", _with_weights(even))
+        uniform = follow(model02, qpos, walk.fps, search_budget=0)
+    np.testing.assert_array_equal(unheld.qpos, uniform.qpos)
+
+
+def _with_weights(weights):
+    """WholeBodyID's constructor with ``weights`` instead of the defaults."""
+    init = WholeBodyID.__init__
+
+    def patched(self, model, joint_dofs, torque_range_nm, _weights=None):
+        init(self, model, joint_dofs, torque_range_nm, weights)
+    return patched
+
+
 def test_states_have_contacts_and_flight_free_steps(states):
     contacts = [len(s.floor_contacts(d, e)[0]) for s, d, _, e in states]
     assert len(states) > 50 and min(contacts) >= 1 and max(contacts) >= 3
