@@ -149,6 +149,7 @@ class WholeBodyID:
                  for d in range(6, self.nv)]
         self.spine_rows = np.flatnonzero(np.isin(names, SPINE_BODIES))
         self.joint_w = np.full(self.nv - 6, self.w.joints)
+        self._held_w = self.joint_w.copy()
         self.actuator_of_hinge = np.argsort(self.hinge_row)
         self.tolerance = BOUND_TOLERANCE * self.strength
         self.at_bound = AT_BOUND * np.where(np.isfinite(self.strength), self.strength, 0.0)
@@ -211,10 +212,13 @@ class WholeBodyID:
 
     def joint_weights(self, spine_held: float) -> np.ndarray:
         """Each hinge acceleration row's weight (nv - 6,): ``joints``, the spine's and
-        neck's hinges (:data:`SPINE_BODIES`) times ``1 + (spine - 1) spine_held``."""
-        w = self.joint_w.copy()
-        w[self.spine_rows] *= 1.0 + (self.w.spine - 1.0) * spine_held
-        return w
+        neck's hinges (:data:`SPINE_BODIES`) times ``1 + (spine - 1) spine_held``. A
+        view of the solver's own buffer, valid until the next call."""
+        if not spine_held:
+            return self.joint_w
+        self._held_w[self.spine_rows] = (self.joint_w[self.spine_rows]
+                                         * (1.0 + (self.w.spine - 1.0) * spine_held))
+        return self._held_w
 
     def _plan(self, data, qdd_des, contact_damping, exclude, floor, spine_held=0.0):
         """:meth:`solve`'s QP: ``(tau (nu,), x (n,), G (nv, n), g0 (nv,), contacts)``."""
@@ -246,7 +250,8 @@ class WholeBodyID:
         # hinges whose applied torque is at a bound are guessed to be the active set; the
         # guess is right when the KKT conditions hold (the QP's minimiser, at about a
         # quarter of the cost), else the QP is solved from scratch.
-        memory = data.userdata[:-1] if data.userdata.shape[0] else data.userdata
+        # (its last entry is the foot placement's: controller.placement.capture_error_m)
+        memory = data.userdata[:-1]
         x = None
         if nl:
             fixed, known = recall_active(memory, geoms)

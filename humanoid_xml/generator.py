@@ -69,7 +69,9 @@ GENERATOR_VERSION = "4"
 LIMIT_SOLREF = (0.005, 1.0)
 #: Numbers of user data carried with the MuJoCo state (``mjData.userdata``): controllers'
 #: memory from one step to the next that must travel with a saved state (the balance
-#: controller's QP warm start, :mod:`controller.wbc`). It takes no part in the physics.
+#: controller's QP warm start, :mod:`controller.wbc`, and in the last entry the foot
+#: placement's capture-offset difference, :func:`controller.placement.capture_error_m`).
+#: It takes no part in the physics.
 USERDATA_SIZE = 100
 LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: Simulation time step, seconds.
