@@ -7,9 +7,10 @@ balance comes from where the next foot lands (SIMBICON, Yin et al. 2007; the cap
 point, Pratt et al. 2006). Here the swing foot is moved, relative to where the reference's
 joint angles put it, by the difference between the character's and the reference's
 *capture offset*: the centre of mass's horizontal offset from the stance foot plus its
-horizontal velocity times ``sqrt(h / g)`` (``h`` the centre of mass height). The shift is
-made by the swing hip's three hinges (the least-norm change that moves the ankle by it,
-from the ankle's Jacobian).
+horizontal velocity times ``sqrt(h / g)`` (``h`` the centre of mass height), the
+reference's taken at the frame nearest the current one where it has the character's stance
+foot down (the current one when it has). The shift is made by the swing hip's three hinges
+(the least-norm change that moves the ankle by it, from the ankle's Jacobian).
 
 A leg swings when none of its foot's bodies touch the floor while the other's do; with
 both feet down or both up nothing is changed.
@@ -181,14 +182,17 @@ class FootPlacement:
         stance = 1 - swing
         self._mj_subtreeVel(self.model, data)
         xpos = data.xpos
-        # the reference's stance foot where the reference has it down, at the frame
-        # nearest this one (a foot the character put down early or lifted late is
-        # compared with where the reference lands it or last stood on it)
+        # the reference at the frame nearest this one where it has the stance foot down:
+        # a foot the character put down early or lifted late is compared with the
+        # reference as it lands it or last stood on it (its centre of mass then, not
+        # now: a character whose flight is shorter than the reference's lands with its
+        # body where the reference's is at its landing, not 0.15 s behind it)
         gain = self.gain if gain is None else gain
+        down = self.down_frame[frame, stance]
         shift = capture_shift(
             data.subtree_com[1], data.subtree_linvel[1], xpos[self.ankle[stance]],
-            self.ref_com[frame], self.ref_com_vel[frame],
-            self.ref_ankle[self.down_frame[frame, stance], stance], self.time_constant_s,
+            self.ref_com[down], self.ref_com_vel[down],
+            self.ref_ankle[down, stance], self.time_constant_s,
             gain, MAX_SHIFT_M)
         if gain:
             capture_error_m(data)[:] = math.hypot(shift[0], shift[1]) / gain

@@ -14,7 +14,7 @@ the recorded frames (each restored by taking its last step again, as the lookahe
 chosen frames are) instead of simulating them; otherwise they are dropped. Which attempts
 are made, in what order, and every frame of the run are the same as on one process, bit for
 bit, and the search's budget counts the same steps; only where the frames are computed
-changes. On 09_06 about 60 % of the restarts are guessed right.
+changes. On 35_01 23 of the 28 restarts are guessed right, on 09_06 11 of 14.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The balance controller's search one attempt ahead on the second process
-(controller.search_ahead): on the real run 09_06, where the search runs again and again,
+(controller.search_ahead): on the real walk 35_01, where the search runs segments again,
 two processes give the same run as one, bit for bit, with the same attempts, while frames
 of the attempts guessed ahead are taken instead of simulated; a guess made for an attempt
 that does not come is dropped."""
@@ -16,16 +16,16 @@ from controller.balance import follow
 
 
 @pytest.fixture(scope="module")
-def run_09_06(catalog):
+def run_35_01(catalog):
     from humanoid_xml import build_mjcf
 
-    motion = catalog.load("09_06")
-    model = mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("09")))
+    motion = catalog.load("35_01")
+    model = mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("35")))
     return model, to_qpos(model, motion), motion.fps
 
 
-def test_the_search_ahead_gives_the_same_run_as_one_process(run_09_06, monkeypatch):
-    model, qpos, fps = run_09_06
+def test_the_search_ahead_gives_the_same_run_as_one_process(run_35_01, monkeypatch):
+    model, qpos, fps = run_35_01
     guesses = {"restarts": 0, "right": 0}
     restarted = ahead_module.SearchAhead.restarted
 
@@ -52,8 +52,8 @@ def test_the_search_ahead_gives_the_same_run_as_one_process(run_09_06, monkeypat
     assert not multiprocessing.active_children()
 
 
-def test_a_wrong_guess_is_dropped(run_09_06, monkeypatch):
-    model, qpos, fps = run_09_06
+def test_a_wrong_guess_is_dropped(run_35_01, monkeypatch):
+    model, qpos, fps = run_35_01
     one = follow(model, qpos, fps, processes=1)
     # every guess is for the wrong mode: the run must not take any of its frames
     entered = ahead_module.SearchAhead.entered

@@ -272,7 +272,7 @@ def test_strength_multiplies_every_torque_limit_the_controller_may_use(tmp_path,
     at_limit = [n for n in weak if weak[n]["saturation_share"] > 0]
     assert {"lfemur_rx", "rfoot_rx"} <= set(at_limit)
     beyond = [n for n in weak if strong[n]["peak_nm"] > max(map(abs, weak[n]["range_nm"]))]
-    assert {"rfemur_rx", "rfoot_rx"} <= set(beyond)
+    assert {"lfemur_rx", "rfoot_rx"} <= set(beyond)
     for bad in ("0", "-1", "nan", "11"):
         assert main(["simulate", "--data", str(data_dir), "--sequence", "09_06@0:60",
                      "--modes", "free", "--strength", bad,
