@@ -184,9 +184,10 @@ class FootPlacement:
         xpos = data.xpos
         # the reference at the frame nearest this one where it has the stance foot down:
         # a foot the character put down early or lifted late is compared with the
-        # reference as it lands it or last stood on it (its centre of mass then, not
-        # now: a character whose flight is shorter than the reference's lands with its
-        # body where the reference's is at its landing, not 0.15 s behind it)
+        # reference as it lands it or last stood on it, its centre of mass then, not now
+        # (on 09_06, whose flights the character cuts short, the reference 0.15 s before
+        # it lands is still in the air, its centre of mass 0.66 m behind the foot: read
+        # as the character far ahead, the swing foot was moved forward, braking)
         gain = self.gain if gain is None else gain
         down = self.down_frame[frame, stance]
         shift = capture_shift(
