@@ -185,9 +185,10 @@ class FootPlacement:
         # the reference at the frame nearest this one where it has the stance foot down:
         # a foot the character put down early or lifted late is compared with the
         # reference as it lands it or last stood on it, its centre of mass then, not now
-        # (on 09_06, whose flights the character cuts short, the reference 0.15 s before
-        # it lands is still in the air, its centre of mass 0.66 m behind the foot: read
-        # as the character far ahead, the swing foot was moved forward, braking)
+        # (the character out of phase with the reference, not off balance: on 09_06,
+        # whose flights the character cuts short, the reference 0.15 s before it lands is
+        # still in the air, its centre of mass 0.66 m behind the foot, and after it lifts
+        # the foot it is in the air ahead of it; both halves carry the run)
         gain = self.gain if gain is None else gain
         down = self.down_frame[frame, stance]
         shift = capture_shift(

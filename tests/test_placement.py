@@ -1,6 +1,7 @@
 """The foot placement's capture-offset rule (controller.placement) on the real run 09_06,
-whose flights the character cuts short: a foot put down before the reference lands it is
-compared with the reference as it lands it, not with the reference in the air."""
+whose flights the character cuts short: a foot put down before the reference lands it, or
+still down after the reference lifts it, is compared with the reference as it lands it or
+last stood on it, not with the reference in the air."""
 
 import mujoco
 import numpy as np
@@ -59,3 +60,21 @@ def test_a_foot_down_early_is_compared_with_the_reference_landing_it(run_09_06):
     assert placement.gain * np.linalg.norm(ahead) > 0.1
     # the trunk hold reads the same small difference
     assert capture_error_m(data)[0] < 0.01 / placement.gain
+
+
+def test_a_foot_lifted_late_is_compared_with_the_reference_last_standing_on_it(run_09_06):
+    model, qpos, fps, placement = run_09_06
+    right = 1
+    last = int(np.flatnonzero(placement.ref_down[: len(qpos) // 2, right])[-1])
+    late = last + int(round(0.1 * fps))  # the character still on its right foot 0.1 s on
+    assert not placement.ref_down[late].any()  # the reference is in the air there
+    assert placement.down_frame[late, right] == last
+    data = _reference_state(model, qpos, fps, last)
+    q = np.array(qpos[late])
+    shift = placement.adjust(data, late, q, floor_bodies=sorted(placement.foot_bodies[right]))
+    assert np.linalg.norm(shift) < 0.01
+    # the reference in the air by then, ahead of where it stood, is far from it
+    ahead = _capture_offset(placement, late, right, last) - (
+        (data.subtree_com[1] - data.xpos[placement.ankle[right]])
+        + placement.time_constant_s * data.subtree_linvel[1])[:2]
+    assert placement.gain * np.linalg.norm(ahead) > 0.1
