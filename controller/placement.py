@@ -188,7 +188,8 @@ class FootPlacement:
         # (the character out of phase with the reference, not off balance: on 09_06,
         # whose flights the character cuts short, the reference 0.15 s before it lands is
         # still in the air, its centre of mass 0.66 m behind the foot, and after it lifts
-        # the foot it is in the air ahead of it; both halves carry the run)
+        # the foot it is in the air ahead of it: the late lifts' half carries the run, the
+        # early landings' halves its search)
         gain = self.gain if gain is None else gain
         down = self.down_frame[frame, stance]
         shift = capture_shift(
