@@ -189,7 +189,8 @@ class FootPlacement:
         # whose flights the character cuts short, the reference 0.15 s before it lands is
         # still in the air, its centre of mass 0.66 m behind the foot, and after it lifts
         # the foot it is in the air ahead of it: the late lifts' half carries the run, the
-        # early landings' halves its search)
+        # early landings' halves its search, and without it the walk sequences joined
+        # whole fall in 16 of their 42 runs against 8)
         gain = self.gain if gain is None else gain
         down = self.down_frame[frame, stance]
         shift = capture_shift(
