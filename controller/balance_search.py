@@ -80,7 +80,8 @@ class Search:
     a changed one keep its mode for :data:`STICKY_S`. The search first *sweeps* back: for
     one trouble (until an attempt gets into trouble further on) it changes one segment at a
     time, each in its next modes, then the one before it (up to :data:`MAX_BACKTRACK`
-    back), the later ones back on the modes they had before; a sweep that finds nothing
+    back from the trouble's own segment, though a changed attempt gets into trouble
+    earlier), the later ones back on the modes they had before; a sweep that finds nothing
     goes back to the choices before it and tries the combinations, nearest first: when a
     segment has no modes left, the one before it, and the segments after it start again
     (the search before the sweep, which spent most of its budget re-running the nearest
@@ -217,14 +218,18 @@ class Search:
         """The segment a retry at frame ``t`` goes back to (in its next mode), or None
         (no mode left within reach)."""
         i = self._segment(t)
-        back = i
+        back = reach_from = i
         if self.trouble is not None and self.trouble.sweeping and i <= self.trouble.segment:
-            back = min(i, self.trouble.changed)  # sweeping: nothing after the last changed
-        while back >= 0 and i - back <= MAX_BACKTRACK:
+            # sweeping: nothing after the last changed, and within reach of the trouble's
+            # own segment, not of the earlier one its changes got into trouble at (which
+            # chased the sweep up to 10 s back, where the combinations found the way)
+            back = min(i, self.trouble.changed)
+            reach_from = self.trouble.segment
+        while back >= 0 and reach_from - back <= MAX_BACKTRACK:
             if self._mode_of(back) + 1 < len(MODES):
                 break
             back -= 1
-        if back < 0 or i - back > MAX_BACKTRACK or back not in self.saved:
+        if back < 0 or reach_from - back > MAX_BACKTRACK or back not in self.saved:
             return None
         return back
 

@@ -216,6 +216,27 @@ def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
     assert s.mode(every + 1) == 0 and s.mode(t) == 1
 
 
+def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
+    """A sweep whose changes get into trouble sooner than the trouble it sweeps for goes
+    back no further than MAX_BACKTRACK segments before that trouble's own segment, not
+    before the sooner one's: beyond it, the combinations (the choices before it first)."""
+    monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 2)
+    s, data, every = search
+    modes = len(MODES)
+    t = 5 * every + 5
+    _run_to(s, data, t)
+    fail = t
+    for segment in (5, 4, 3):  # each in its modes, each attempt in trouble in its own segment
+        for _ in range(1, modes):
+            assert s.retry(data, fail, steps=0) == segment * every + 1
+            fail = segment * every + 5
+            _run_to(s, data, fail)
+    # segment 2 is within reach of segment 3, where the last attempt got into trouble,
+    # but not of segment 5: the sweep is spent, segment 3 back in the default mode
+    assert s.retry(data, fail, steps=0) == 3 * every + 1
+    assert s.mode(3 * every + 1) == 0 and s.mode(t) == 0
+
+
 def test_02_01_grounded(model02, walk):
     """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
     it; grounded, they touch it (within the low-pass's smoothing)."""
