@@ -80,7 +80,7 @@ class Search:
     a changed one keep its mode for :data:`STICKY_S`. The search first *sweeps* back: for
     one trouble (until an attempt gets into trouble further on) it changes one segment at a
     time, each in its next modes, then the one before it (up to :data:`MAX_BACKTRACK`
-    back from the trouble's own segment, though a changed attempt gets into trouble
+    back from the trouble's own segment, even when a changed attempt gets into trouble
     earlier), the later ones back on the modes they had before; a sweep that finds nothing
     goes back to the choices before it and tries the combinations, nearest first: when a
     segment has no modes left, the one before it, and the segments after it start again
