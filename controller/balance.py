@@ -54,7 +54,7 @@ from controller.balance_control import (
     actuator_torque_range,
     torque_model,
 )
-from controller.balance_run import BalanceRun, FrameLog, raw_step_seconds
+from controller.balance_run import BalanceRun, FrameLog
 from controller.balance_search import Search
 from controller.gain_selection import SELECT_GAINS, GainSelector
 
@@ -105,6 +105,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.placement import FootPlacement
     from controller.pose_error import reference_errors
     from controller.qpos import free_joint
+    from controller.raw_clock import RawStepClock
     from controller.search_ahead import SearchAhead
     from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.wbc import WholeBodyID
@@ -172,10 +173,12 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
+    raw = RawStepClock(model, start, start_qvel)
     helper = contextlib.closing(selector) if selector else contextlib.nullcontext()
     with collected_warnings(), bar, helper:
         t = 1
         while t < n_frames:
+            raw.tick()
             if (search.enter(data, t) and ahead is not None and t > search.quiet_until
                     and search.mode(t) > 0):
                 ahead.entered(search, t)
@@ -226,7 +229,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             if t + 1 >= stop_frame:
                 break
             t += 1
-    wall = time.perf_counter() - clock
+    wall = time.perf_counter() - clock - raw.spent_s
     stop_frame = min(stop_frame, t + 1)
     log.stop(stop_frame)
     ctrl = ctrl[:(stop_frame - 1) * substeps]
@@ -243,7 +246,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         torque_saturated=log.torque_saturated, limit_rows=log.limit_rows,
         self_contacts=log.self_contacts, trouble=log.trouble, warnings=warning_counts(data),
         external_force_peak=log.external_force_peak, weight_n=figures.weight_n, wall_s=wall,
-        sim_s=ctrl.shape[0] * dt, raw_step_s=raw_step_seconds(model, start, start_qvel),
+        sim_s=ctrl.shape[0] * dt, raw_step_s=raw.step_s(),
         segment_modes=search.modes(), retries=search.retries, simulated_steps=steps,
         lookahead_steps=selector.lookahead.steps if selector is not None else 0,
         reused_steps=reused, troubles=search.troubles(),

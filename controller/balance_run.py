@@ -35,7 +35,6 @@ runs them open-loop from the same start and reproduces the run.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,11 +91,12 @@ class BalanceRun:
         The body's weight.
     wall_s : float
         Wall-clock seconds of the stepping loop (from after the set-up, which includes
-        loading the compiled kernels once per process).
+        loading the compiled kernels once per process; the raw bursts' time taken off).
     sim_s : float
         Simulated seconds.
     raw_step_s : float
-        Wall seconds of one raw ``mj_step`` of the same model, timed in the same run.
+        Wall seconds of one raw ``mj_step`` of the same model, timed in bursts while the
+        run went on (:class:`controller.raw_clock.RawStepClock`).
     segment_modes : ndarray of int, shape (segments,)
         The index in :data:`controller.balance_control.MODES` each
         :data:`controller.balance_search.SEGMENT_S` segment ran in.
@@ -209,29 +209,6 @@ def replay(model, run: BalanceRun) -> np.ndarray:
         if (k + 1) % run.substeps == 0:
             out[(k + 1) // run.substeps] = data.qpos
     return out
-
-
-def raw_step_seconds(model, qpos, qvel, steps: int = 300, repeat: int = 5) -> float:
-    """Wall seconds of one plain ``mj_step`` of the model from a state (servos holding
-    the state's pose), the unit of the controller's cost: the fastest of ``repeat`` runs
-    of ``steps`` steps, each from the state. (One run of 300 steps, on a quiet 2-vCPU
-    machine, read 50-83 us over 20 tries, the fastest of 5 49-52 us: the fastest is the
-    machine's speed, the rest its noise.)"""
-    import mujoco
-
-    data = mujoco.MjData(model)
-    ctrl = qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]]
-    best_s = math.inf
-    for _ in range(repeat):
-        mujoco.mj_resetData(model, data)
-        data.qpos[:] = qpos
-        data.qvel[:] = qvel
-        data.ctrl[:] = ctrl
-        clock = time.perf_counter()
-        for _ in range(steps):
-            mujoco.mj_step(model, data)
-        best_s = min(best_s, time.perf_counter() - clock)
-    return best_s / steps
 
 
 def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[str, float]:
