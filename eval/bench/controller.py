@@ -119,7 +119,9 @@ def run(context: BenchContext) -> dict:
 def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> dict:
     """The balance controller's speed against raw ``mj_step`` on the same steps (the
     run's own; the search's extra steps count in its wall time), on one process and on
-    two."""
+    two. ``raw_steps_per_step`` is in each run's own unit, raw ``mj_step`` timed in bursts
+    while it ran (:mod:`controller.raw_clock`); the replay of the run's torques, timed
+    after the runs, gives ``reference_mj_step_..._per_s`` and ``ratio_to_raw``."""
     import mujoco
 
     from controller.balance import follow
@@ -154,9 +156,9 @@ def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> 
         f"{prefix}wall_s_per_sim_s": run.wall_s / run.sim_s,
         f"reference_mj_step_{prefix}per_s": run.steps / raw_s,
         f"{prefix}ratio_to_raw": (run.sim_s / run.wall_s) / (run.sim_s / raw_s),
-        f"{prefix}raw_steps_per_step": run.wall_s / raw_s,
+        f"{prefix}raw_steps_per_step": run.raw_steps_per_step,
         f"{prefix}2proc_wall_s_per_sim_s": two.wall_s / two.sim_s,
-        f"{prefix}2proc_raw_steps_per_step": two.wall_s / raw_s,
+        f"{prefix}2proc_raw_steps_per_step": two.raw_steps_per_step,
         f"{prefix}2proc_same_run": bool(np.array_equal(two.ctrl, run.ctrl)),
     }
 
