@@ -1,10 +1,10 @@
 """The unit of the balance controller's cost: a plain ``mj_step``, timed beside the run.
 
 A ratio against raw ``mj_step`` only cancels the machine's speed if both are timed under
-the same conditions. On a shared 2-vCPU machine they are not at different moments: timed
-after each run (the fastest of five runs of 300 steps from the run's start state), the
-unit read up to 1.8x apart between runs a minute apart, while the runs' own wall times
-moved by a tenth (2026-11-28, fifteen rows timed twice). :class:`RawStepClock`
+the same conditions, and on a shared 2-vCPU machine moments apart are not: timed after
+each run (the fastest of five runs of 300 steps from the run's start state), the
+unit read up to 1.7x apart between two runs of the same row, while the runs' own wall
+times moved by at most 1.2x (2026-11-28, fifteen rows timed twice). :class:`RawStepClock`
 therefore times a short burst of plain steps every :data:`EVERY_S` of wall time *while
 the run goes on*, and the unit is their mean, as the run's wall time is a mean over the
 same stretch; the bursts' own time is taken off the run's.
