@@ -57,8 +57,12 @@ class RawStepClock:
         self.spent_s = 0.0
         self.timed_s = 0.0
         self.timed_steps = 0
-        self.bursts = 0
         self._next_s = clock() + self.every_s
+
+    @property
+    def bursts(self) -> int:
+        """How many bursts were timed."""
+        return self.timed_steps // self.burst_steps
 
     def tick(self) -> None:
         """Time a burst if :data:`EVERY_S` have passed since the last one."""
@@ -81,7 +85,6 @@ class RawStepClock:
         self.timed_s += end - start
         self.timed_steps += self.burst_steps
         self.spent_s += end - begin
-        self.bursts += 1
         self._next_s = end + self.every_s
 
     def step_s(self) -> float:
