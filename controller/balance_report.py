@@ -164,7 +164,10 @@ class BalanceTracking:
             "segment_modes": run.segment_modes.tolist(),
             "search_troubles": [
                 {"frame": r.frame, "time_s": round(r.time_s, 5), "cause": list(r.cause),
-                 "retries": r.retries, "rerun_s": round(r.rerun_s, 5), "outcome": r.outcome}
+                 "retries": r.retries, "rerun_s": round(r.rerun_s, 5), "outcome": r.outcome,
+                 "restarts_by_mode": list(r.restarts_by_mode),
+                 "rerun_s_by_mode": [round(x, 5) for x in r.rerun_s_by_mode],
+                 "last_mode": r.last_mode}
                 for r in run.troubles],
             **self.summary(),
         }

@@ -59,6 +59,12 @@ class SearchTrouble(NamedTuple):
         ``"got past"`` (an attempt went on beyond the segment in trouble), ``"budget
         spent"`` or ``"no mode within reach"`` (the search gave up and the run went on
         from the attempt that got furthest).
+    restarts_by_mode, rerun_s_by_mode : tuple, one entry per :data:`MODES` each
+        ``retries`` and ``rerun_s`` by the mode each restart ran its first segment in
+        (the segment it changed).
+    last_mode : int or None
+        The mode the last restart ran its first segment in: for a trouble the search got
+        past, the change that got past it (None: no restart).
     """
 
     frame: int
@@ -67,6 +73,9 @@ class SearchTrouble(NamedTuple):
     retries: int
     rerun_s: float
     outcome: str
+    restarts_by_mode: tuple = ()
+    rerun_s_by_mode: tuple = ()
+    last_mode: int | None = None
 
 
 class Search:
@@ -175,7 +184,10 @@ class Search:
     def troubles(self) -> tuple:
         """Every trouble the search worked on, :class:`SearchTrouble` each (the last one
         got past if the search did not give up on it)."""
-        return tuple(SearchTrouble(**{"outcome": "got past", **r}) for r in self._records)
+        return tuple(SearchTrouble(**{"outcome": "got past", **r,
+                                      "restarts_by_mode": tuple(r["restarts_by_mode"]),
+                                      "rerun_s_by_mode": tuple(r["rerun_s_by_mode"])})
+                     for r in self._records)
 
     def retry(self, data, t: int, steps: int, failed: bool = False) -> int | None:
         """Restore the state for the next attempt; returns the frame to run from, or
@@ -194,7 +206,9 @@ class Search:
                 self._records[-1]["outcome"] = "got past"
             cause = ("simulation failed",) if failed else self.causes(data, t)
             self._records.append(dict(frame=int(t), time_s=t / self.fps, cause=cause,
-                                      retries=0, rerun_s=0.0))
+                                      retries=0, rerun_s=0.0,
+                                      restarts_by_mode=[0] * len(MODES),
+                                      rerun_s_by_mode=[0.0] * len(MODES), last_mode=None))
             if not spent:
                 self.trouble = _Trouble(i, i, dict(self.choice))
         back = self._back(t)
@@ -262,8 +276,13 @@ class Search:
         import mujoco
 
         record = self._records[-1]
+        rerun_s = (t - segment * self.every) / self.fps
+        mode = self._mode_of(segment, choice)
         record["retries"] += 1
-        record["rerun_s"] += (t - segment * self.every) / self.fps
+        record["rerun_s"] += rerun_s
+        record["restarts_by_mode"][mode] += 1
+        record["rerun_s_by_mode"][mode] += rerun_s
+        record["last_mode"] = mode
         self.choice = choice
         for j in [j for j in self.saved if j > segment]:
             del self.saved[j]

@@ -31,7 +31,11 @@ down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`
 ``raw_steps_per_step`` (the controller's cost in raw ``mj_step`` equivalents). The whole
 run's figures (``totals.tracking.free``) also list ``search_troubles`` (added within
 version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "retries",
-"rerun_s", "outcome"}`` (:class:`controller.balance_search.SearchTrouble`); and every part's,
+"rerun_s", "outcome", "restarts_by_mode", "rerun_s_by_mode", "last_mode"}``
+(:class:`controller.balance_search.SearchTrouble`; the last three added within version 2:
+the retries and the seconds run again by the mode of the segment each restart changed,
+one entry per mode of ``controller.balance_control.MODES``, and the mode of the last
+restart, the change that got past the trouble when it did); and every part's,
 ``torque_by_actuator`` (added within version 2; JSON only): per actuator ``{"peak_nm",
 "mean_nm", "range_nm", "saturation_share", "saturated_concentric_share"}``: the torque's
 largest and mean magnitude, the actuator's range ``[least, largest]`` (its strength either

@@ -208,9 +208,10 @@ def reference(settings: Settings, row: Row, seed: int):
 
 def run_unit(settings: Settings, unit: Unit) -> dict:
     """One run (in a worker): the figures of :data:`RUN_FIELDS`, plus ``seconds`` (the
-    motion's length), ``wall_s`` and ``search_gave_up``: the troubles the search gave up
+    motion's length), ``wall_s``, ``search_gave_up``: the troubles the search gave up
     on (``{"time_s", "outcome"}`` each, the outcome ``"budget spent"`` or ``"no mode
-    within reach"``; :class:`controller.balance_search.SearchTrouble`)."""
+    within reach"``; :class:`controller.balance_search.SearchTrouble`), and
+    ``search_by_mode``: :func:`search_by_mode` of its troubles."""
     from controller.analysis import free_run
     from controller.qpos import to_qpos
     from eval.study import single_threaded_blas
@@ -224,6 +225,7 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
     out["search_gave_up"] = [{"time_s": trouble["time_s"], "outcome": trouble["outcome"]}
                              for trouble in summary["search_troubles"]
                              if trouble["outcome"] != "got past"]
+    out["search_by_mode"] = search_by_mode(summary["search_troubles"])
     out["seconds"] = round(motion.n_frames / motion.fps, 4)
     out["wall_s"] = round(tracking.run.wall_s, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
@@ -332,6 +334,37 @@ def row_summary(result: RobustnessResult, row: Row) -> dict:
     }
 
 
+def search_by_mode(troubles) -> dict:
+    """Where the search's work went, by the mode of the segment each restart changed
+    (:data:`controller.balance_control.MODES`): ``{"restarts", "rerun_s", "got_past"}``,
+    one entry per mode each; ``got_past`` counts the troubles whose last restart (the
+    change that got past) was in that mode. ``troubles``: a report's
+    ``search_troubles``."""
+    from controller.balance_control import MODES
+
+    out = {"restarts": [0] * len(MODES), "rerun_s": [0.0] * len(MODES),
+           "got_past": [0] * len(MODES)}
+    for trouble in troubles:
+        for m in range(len(MODES)):
+            out["restarts"][m] += trouble["restarts_by_mode"][m]
+            out["rerun_s"][m] += trouble["rerun_s_by_mode"][m]
+        if trouble["outcome"] == "got past" and trouble["last_mode"] is not None:
+            out["got_past"][trouble["last_mode"]] += 1
+    out["rerun_s"] = [round(x, 4) for x in out["rerun_s"]]
+    return out
+
+
+def _summed_by_mode(runs) -> dict | None:
+    """:func:`search_by_mode` summed over runs (None when no run has it: checkpoints of
+    before it was recorded)."""
+    parts = [r["search_by_mode"] for r in runs if r.get("search_by_mode")]
+    if not parts:
+        return None
+    return {key: [round(sum(column), 4) for column in zip(*(p[key] for p in parts),
+                                                          strict=True)]
+            for key in ("restarts", "rerun_s", "got_past")}
+
+
 def _budget_spent(run: dict) -> bool:
     """Whether the search gave up on a trouble of the run with its budget spent."""
     return any(g["outcome"] == "budget spent" for g in run["search_gave_up"])
@@ -351,7 +384,8 @@ def summary(result: RobustnessResult) -> dict:
                    "falls_budget_spent": sum(r["falls_budget_spent"] for r in rows),
                    "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
                    "offset_falls": sum(r["offset_falls"] for r in rows),
-                   "offset_runs": sum(r["offset_runs"] for r in rows)},
+                   "offset_runs": sum(r["offset_runs"] for r in rows),
+                   "search_by_mode": _summed_by_mode(result.runs.values())},
         "rows": rows,
         "runs": result.runs,
     }
@@ -401,7 +435,29 @@ def table_markdown(report: dict) -> str:
         lines.append(f"Of the falls, {spent} came after the search had spent its budget (a "
                      "larger `--search-budget` may carry them)"
                      + (f", {other} with no mode left within its reach." if other else "."))
+    by_mode = t.get("search_by_mode")
+    if by_mode and sum(by_mode["restarts"]):
+        lines += ["", *_by_mode_markdown(by_mode)]
     return "\n".join(lines) + "\n"
+
+
+def _by_mode_markdown(by_mode: dict) -> list[str]:
+    """The search's work by mode, every run together (markdown lines)."""
+    from controller.balance_control import MODES
+
+    total_s = sum(by_mode["rerun_s"]) or 1.0
+    lines = ["The search's work by the mode of the segment each restart changed (every run "
+             "together; a trouble got past counts under its last restart's mode):", "",
+             "| mode | placement gain | swing contacts not planned | swing clearance (m) | "
+             "restarts | simulated s run again | troubles got past |",
+             "|---|---|---|---|---|---|---|"]
+    for m, mode in enumerate(MODES):
+        lines.append(f"| {m} | {mode.placement_gain:g} | {mode.swing_contacts_excluded} | "
+                     f"{mode.swing_clearance_m:g} | {by_mode['restarts'][m]} | "
+                     f"{by_mode['rerun_s'][m]:.1f} "
+                     f"({100 * by_mode['rerun_s'][m] / total_s:.0f} %) | "
+                     f"{by_mode['got_past'][m]} |")
+    return lines
 
 
 def plot(report: dict, path) -> None:

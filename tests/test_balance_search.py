@@ -134,10 +134,15 @@ def test_search_records_each_trouble_and_how_it_ended(search):
     _run_to(s, data, t - 2)  # the next attempt gets into trouble sooner
     assert s.retry(data, t - 2, steps=0) == 2 * every + 1
     (first,) = s.troubles()
-    assert first._replace(rerun_s=0.0) == balance_search.SearchTrouble(
+    modes = len(MODES)
+    assert first._replace(rerun_s=0.0, rerun_s_by_mode=()) == balance_search.SearchTrouble(
         frame=t, time_s=t / 120.0, cause=("pelvis low",), retries=2, rerun_s=0.0,
-        outcome="got past")  # open: so far
+        outcome="got past",  # open: so far
+        restarts_by_mode=(0, 1, 1) + (0,) * (modes - 3), rerun_s_by_mode=(), last_mode=2)
     assert first.rerun_s == pytest.approx((5 + 3) / 120.0)
+    # segment 2 ran again in mode 1 (from its start to frame t), then in mode 2
+    np.testing.assert_allclose(first.rerun_s_by_mode,
+                               [0.0, 5 / 120.0, 3 / 120.0] + [0.0] * (modes - 3))
     later = 4 * every + 7  # an attempt got past segment 2, into trouble in segment 4
     _run_to(s, data, later)
     assert s.retry(data, later, steps=0, failed=True) == 4 * every + 1
@@ -149,6 +154,9 @@ def test_search_records_each_trouble_and_how_it_ended(search):
     assert second.outcome == "budget spent" and second.retries == 2
     assert second.rerun_s == pytest.approx((7 + 4) / 120.0)
     assert sum(r.retries for r in s.troubles()) == s.retries
+    for trouble in s.troubles():
+        assert sum(trouble.restarts_by_mode) == trouble.retries
+        assert sum(trouble.rerun_s_by_mode) == pytest.approx(trouble.rerun_s)
 
 
 def test_search_goes_back_as_far_as_its_reach(search):

@@ -150,6 +150,11 @@ def test_a_fall_after_the_search_spent_its_budget_is_counted_as_such(data_dir, t
     assert report["rows"][0]["falls_budget_spent"] == 1
     assert report["totals"]["falls_budget_spent"] == 1
     assert "Of the falls, 1 came after the search had spent its budget" in printed
+    # where the search's work went, by mode: every restart and second run again counted once
+    by_mode = report["totals"]["search_by_mode"]
+    assert sum(by_mode["restarts"]) == run["search_retries"] > 0
+    assert by_mode["restarts"][1] > 0 and sum(by_mode["got_past"]) == 0  # it got past none
+    assert "The search's work by the mode of the segment each restart changed" in printed
 
 
 def test_cut_matched_runs_the_sequence_on_pieces_cut_at_the_next_ones_phase(data_dir,

@@ -293,6 +293,13 @@ def test_the_search_is_summed_up_in_one_line():
     assert _search_line(troubles) == (
         "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
         "again; got past 1; gave up at 1.07 s (pelvis low and tilted: budget spent)")
+    # with the seconds by mode (reports of this version): summed over the troubles
+    troubles[0]["rerun_s_by_mode"] = [0.0, 4.0, 5.0, 0.0, 10.175, 0.0]
+    troubles[1]["rerun_s_by_mode"] = [0.5, 1.0, 2.0, 3.0, 4.0, 5.45833]
+    assert _search_line(troubles) == (
+        "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
+        "again; got past 1 (seconds run again by the mode tried, 0-5: 0.5 / 5.0 / 7.0 / "
+        "3.0 / 14.2 / 5.5); gave up at 1.07 s (pelvis low and tilted: budget spent)")
 
 
 def test_the_joints_most_often_at_full_strength_in_one_line():
