@@ -449,11 +449,12 @@ def _by_mode_markdown(by_mode: dict) -> list[str]:
     lines = ["The search's work by the mode of the segment each restart changed (every run "
              "together; a trouble got past counts under its last restart's mode):", "",
              "| mode | placement gain | swing contacts not planned | swing clearance (m) | "
-             "restarts | simulated s run again | troubles got past |",
-             "|---|---|---|---|---|---|---|"]
+             "spine held | restarts | simulated s run again | troubles got past |",
+             "|---|---|---|---|---|---|---|---|"]
     for m, mode in enumerate(MODES):
         lines.append(f"| {m} | {mode.placement_gain:g} | {mode.swing_contacts_excluded} | "
-                     f"{mode.swing_clearance_m:g} | {by_mode['restarts'][m]} | "
+                     f"{mode.swing_clearance_m:g} | {'yes' if mode.spine_held else 'no'} | "
+                     f"{by_mode['restarts'][m]} | "
                      f"{by_mode['rerun_s'][m]:.1f} "
                      f"({100 * by_mode['rerun_s'][m] / total_s:.0f} %) | "
                      f"{by_mode['got_past'][m]} |")
