@@ -354,11 +354,11 @@ def search_by_mode(troubles) -> dict:
     return out
 
 
-def _summed_by_mode(runs) -> dict | None:
-    """:func:`search_by_mode` summed over runs (None when no run has it: checkpoints of
-    before it was recorded)."""
-    parts = [r["search_by_mode"] for r in runs if r.get("search_by_mode")]
-    if not parts:
+def summed_by_mode(runs) -> dict | None:
+    """:func:`search_by_mode` summed over runs (None when a run lacks it, resumed from a
+    checkpoint of before it was recorded: a sum over some of the runs would read as all)."""
+    parts = [r.get("search_by_mode") for r in runs]
+    if not parts or any(p is None for p in parts):
         return None
     return {key: [round(sum(column), 4) for column in zip(*(p[key] for p in parts),
                                                           strict=True)]
@@ -385,7 +385,7 @@ def summary(result: RobustnessResult) -> dict:
                    "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
                    "offset_falls": sum(r["offset_falls"] for r in rows),
                    "offset_runs": sum(r["offset_runs"] for r in rows),
-                   "search_by_mode": _summed_by_mode(result.runs.values())},
+                   "search_by_mode": summed_by_mode(result.runs.values())},
         "rows": rows,
         "runs": result.runs,
     }

@@ -15,6 +15,7 @@ from eval.robustness import (
     parse_row,
     reference,
     run_robustness,
+    summed_by_mode,
 )
 from upm.cli import main
 from upm.errors import UsageError
@@ -102,6 +103,10 @@ def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     assert result.run(row, 0) == kept  # read back, not run again
     assert result.run(row, 1)["seconds"] == pytest.approx(0.5)
     assert "marker" not in result.run(row, 1)
+    # the resumed run has no search figures by mode: no sum over only some of the runs
+    assert "search_by_mode" in result.run(row, 1)
+    assert summed_by_mode(result.runs.values()) is None
+    assert summed_by_mode([result.run(row, 1)]) == result.run(row, 1)["search_by_mode"]
 
 
 def test_strength_is_a_setting_of_the_study(data_dir):
