@@ -271,8 +271,8 @@ def _search_line(troubles: list) -> str:
             f"{sum(r['retries'] for r in troubles)} retries running "
             f"{sum(r['rerun_s'] for r in troubles):.1f} simulated s again; got past "
             f"{len(troubles) - len(given_up)}")
-    by_mode = [r["rerun_s_by_mode"] for r in troubles if r.get("rerun_s_by_mode")]
-    if by_mode:
+    by_mode = [r.get("rerun_s_by_mode") for r in troubles]
+    if all(by_mode):  # every trouble has them (a report of before had none): not a part sum
         seconds = [sum(column) for column in zip(*by_mode, strict=True)]
         line += (f" (seconds run again by the mode tried, 0-{len(seconds) - 1}: "
                  + " / ".join(f"{x:.1f}" for x in seconds) + ")")
