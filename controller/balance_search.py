@@ -35,6 +35,11 @@ STICKY_S = 2.0
 #: chosen, fall 11 times in 110 against 25, with the search before its sweep; only runs
 #: that spend more than 15 cost more).
 SEARCH_BUDGET = 30.0
+#: The sweep tries the modes before this one; the last (no contact of the swing foot
+#: planned) only in the combinations (over issue 10's runs, seeds 0-20 whole and cut: as
+#: many falls, 8 and 0, with 18 % fewer segments run again; in the sweep the last mode ran
+#: 43 % of the rerun work and got past 13 % of the troubles).
+SWEEP_MODES = len(MODES) - 1
 
 
 class SearchTrouble(NamedTuple):
@@ -88,19 +93,19 @@ class Search:
     segment is run again from its saved start state in the next mode; the segments after
     a changed one keep its mode for :data:`STICKY_S`. The search first *sweeps* back: for
     one trouble (until an attempt gets into trouble further on) it changes one segment at a
-    time, each in its next modes, then the one before it (up to :data:`MAX_BACKTRACK`
-    back from the trouble's own segment, even when a changed attempt gets into trouble
-    earlier), the later ones back on the modes they had before; a sweep that finds nothing
-    goes back to the choices before it and tries the combinations, nearest first: when a
-    segment has no modes left, the one before it, and the segments after it start again
-    (the search before the sweep, which spent most of its budget re-running the nearest
-    segments' combinations: over seeds 0-20 of issue 10's rows the sweep made 12 falls of
-    231 against 25, 5 against 11 on seeds 11-20, not looked at when it was chosen, with
-    60 % fewer segments run again). When the search has spent :data:`SEARCH_BUDGET` times the
-    reference's physics steps, or has tried every mode within reach, the attempt that got
-    furthest is run again and the run goes on from it (a fall is a fall). SAMCON (Liu et
-    al. 2010) searches the same way, with sampled target offsets instead of a few discrete
-    modes.
+    time, each in its next modes before :data:`SWEEP_MODES`, then the one before it (up to
+    :data:`MAX_BACKTRACK` back from the trouble's own segment, even when a changed attempt
+    gets into trouble earlier), the later ones back on the modes they had before; a sweep
+    that finds nothing goes back to the choices before it and tries the combinations in
+    every mode, nearest first: when a segment has no modes left, the one before it, and the
+    segments after it start again (the search before the sweep, which spent most of its
+    budget re-running the nearest segments' combinations: over seeds 0-20 of issue 10's
+    rows the sweep made 12 falls of 231 against 25, 5 against 11 on seeds 11-20, not looked
+    at when it was chosen, with 60 % fewer segments run again). When the search has spent
+    :data:`SEARCH_BUDGET` times the reference's physics steps, or has tried every mode
+    within reach, the attempt that got furthest is run again and the run goes on from it
+    (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with sampled target
+    offsets instead of a few discrete modes.
     """
 
     def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_heights_m,
@@ -233,14 +238,16 @@ class Search:
         (no mode left within reach)."""
         i = self._segment(t)
         back = reach_from = i
+        limit = len(MODES)
         if self.trouble is not None and self.trouble.sweeping and i <= self.trouble.segment:
             # sweeping: nothing after the last changed, and within reach of the trouble's
             # own segment, not of the earlier one its changes got into trouble at (which
             # chased the sweep up to 10 s back, where the combinations found the way)
             back = min(i, self.trouble.changed)
             reach_from = self.trouble.segment
+            limit = SWEEP_MODES
         while back >= 0 and reach_from - back <= MAX_BACKTRACK:
-            if self._mode_of(back) + 1 < len(MODES):
+            if self._mode_of(back) + 1 < limit:
                 break
             back -= 1
         if back < 0 or reach_from - back > MAX_BACKTRACK or back not in self.saved:

@@ -66,11 +66,11 @@ def _run_to(search, data, t):
 
 def test_search_retries_then_backtracks(search):
     s, data, every = search
-    modes = len(MODES)
+    sweep = balance_search.SWEEP_MODES
     t = 2 * every + 5  # in segment 2
     _run_to(s, data, t)
-    # the segment in trouble runs again in each next mode, from its saved start
-    for mode in range(1, modes):
+    # the segment in trouble runs again in each next mode of the sweep, from its saved start
+    for mode in range(1, sweep):
         assert s.retry(data, t, steps=0) == 2 * every + 1
         assert s.mode(t) == mode
         assert data.time == 2 * every + 1
@@ -81,7 +81,7 @@ def test_search_retries_then_backtracks(search):
     assert s.mode(every + 1) == 1 and s.mode(t) == 1
     last_sticky = 1 + s.sticky
     assert s.modes()[:last_sticky + 2].tolist() == [0] + [1] * s.sticky + [1, 0]
-    assert s.retries == modes
+    assert s.retries == sweep
 
 
 def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
@@ -183,13 +183,13 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     in every mode, segment 1 takes the next ones with segment 2 back on the mode it had
     (inherited), not every combination of the two."""
     s, data, every = search
-    modes = len(MODES)
+    sweep = balance_search.SWEEP_MODES
     t = 2 * every + 5
     _run_to(s, data, t)
-    for _ in range(1, modes):
+    for _ in range(1, sweep):
         assert s.retry(data, t, steps=0) == 2 * every + 1
         _run_to(s, data, t)
-    for mode in range(1, modes):
+    for mode in range(1, sweep):
         assert s.retry(data, t, steps=0) == every + 1
         assert s.mode(every + 1) == mode and s.mode(t) == mode  # segment 2 inherits it
         _run_to(s, data, t)
@@ -199,7 +199,7 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     later = i * every + 5
     _run_to(s, data, later)
     assert s.retry(data, later, steps=0) == i * every + 1
-    assert s.mode(later) == 1 and s.mode(every + 1) == modes - 1
+    assert s.mode(later) == 1 and s.mode(every + 1) == sweep - 1
 
 
 def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
@@ -208,20 +208,24 @@ def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
     the combinations, nearest segment first."""
     monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 1)
     s, data, every = search
-    modes = len(MODES)
+    modes, sweep = len(MODES), balance_search.SWEEP_MODES
     t = 2 * every + 5
     _run_to(s, data, t)
-    for _ in range(2 * (modes - 1)):  # segment 2's modes, then segment 1's
+    for _ in range(2 * (sweep - 1)):  # segment 2's modes in the sweep, then segment 1's
         assert s.retry(data, t, steps=0) is not None
         _run_to(s, data, t)
-    assert s.mode(every + 1) == modes - 1
+    assert s.mode(every + 1) == sweep - 1 and sweep < modes
     # the sweep is spent: segment 1 back in the default mode, run from its start
     assert s.retry(data, t, steps=0) == every + 1
     assert s.mode(every + 1) == 0 and s.mode(t) == 0
     _run_to(s, data, t)
-    # the same trouble again: now every combination, segment 2's modes first
-    assert s.retry(data, t, steps=0) == 2 * every + 1
-    assert s.mode(every + 1) == 0 and s.mode(t) == 1
+    # the same trouble again: now every combination in every mode, segment 2's first
+    for mode in range(1, modes):
+        assert s.retry(data, t, steps=0) == 2 * every + 1
+        assert s.mode(every + 1) == 0 and s.mode(t) == mode
+        _run_to(s, data, t)
+    assert s.retry(data, t, steps=0) == every + 1
+    assert s.mode(every + 1) == 1 and s.mode(t) == 1
 
 
 def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
@@ -230,12 +234,12 @@ def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
     before the sooner one's: beyond it, the combinations (the choices before it first)."""
     monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 2)
     s, data, every = search
-    modes = len(MODES)
+    sweep = balance_search.SWEEP_MODES
     t = 5 * every + 5
     _run_to(s, data, t)
     fail = t
     for segment in (5, 4, 3):  # each in its modes, each attempt in trouble in its own segment
-        for _ in range(1, modes):
+        for _ in range(1, sweep):
             assert s.retry(data, fail, steps=0) == segment * every + 1
             fail = segment * every + 5
             _run_to(s, data, fail)
