@@ -180,8 +180,8 @@ def test_search_goes_back_as_far_as_its_reach(search):
 
 def test_search_sweeps_back_one_segment_at_a_time(search):
     """For one trouble the search changes one segment at a time: when segment 2 has run
-    in every mode, segment 1 takes the next ones with segment 2 back on the mode it had
-    (inherited), not every combination of the two."""
+    in every mode of the sweep, segment 1 takes the next ones with segment 2 back on the
+    mode it had (inherited), not every combination of the two."""
     s, data, every = search
     sweep = balance_search.SWEEP_MODES
     t = 2 * every + 5
