@@ -69,8 +69,8 @@ def test_search_retries_then_backtracks(search):
     sweep = balance_search.SWEEP_MODES
     t = 2 * every + 5  # in segment 2
     _run_to(s, data, t)
-    # the segment in trouble runs again in each next mode of the sweep, from its saved start
-    for mode in range(1, sweep):
+    # the segment in trouble runs again in each mode of the sweep, from its saved start
+    for mode in sweep:
         assert s.retry(data, t, steps=0) == 2 * every + 1
         assert s.mode(t) == mode
         assert data.time == 2 * every + 1
@@ -78,10 +78,11 @@ def test_search_retries_then_backtracks(search):
     # no modes left there: the segment before it; segment 2 starts over in its mode,
     # and the segments after keep it for STICKY_S, then go back to the default
     assert s.retry(data, t, steps=0) == every + 1
-    assert s.mode(every + 1) == 1 and s.mode(t) == 1
+    first = sweep[0]
+    assert s.mode(every + 1) == first and s.mode(t) == first
     last_sticky = 1 + s.sticky
-    assert s.modes()[:last_sticky + 2].tolist() == [0] + [1] * s.sticky + [1, 0]
-    assert s.retries == sweep
+    assert s.modes()[:last_sticky + 2].tolist() == [0] + [first] * s.sticky + [first, 0]
+    assert s.retries == len(sweep) + 1
 
 
 def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
@@ -134,15 +135,17 @@ def test_search_records_each_trouble_and_how_it_ended(search):
     _run_to(s, data, t - 2)  # the next attempt gets into trouble sooner
     assert s.retry(data, t - 2, steps=0) == 2 * every + 1
     (first,) = s.troubles()
-    modes = len(MODES)
+    one, two = balance_search.SWEEP_MODES[:2]  # the sweep's first two modes
+    restarts, rerun_s = np.zeros(len(MODES), int), np.zeros(len(MODES))
+    restarts[[one, two]] = 1
+    # segment 2 ran again in the first (from its start to frame t), then in the second
+    rerun_s[one], rerun_s[two] = 5 / 120.0, 3 / 120.0
     assert first._replace(rerun_s=0.0, rerun_s_by_mode=()) == balance_search.SearchTrouble(
         frame=t, time_s=t / 120.0, cause=("pelvis low",), retries=2, rerun_s=0.0,
         outcome="got past",  # open: so far
-        restarts_by_mode=(0, 1, 1) + (0,) * (modes - 3), rerun_s_by_mode=(), last_mode=2)
+        restarts_by_mode=tuple(restarts), rerun_s_by_mode=(), last_mode=two)
     assert first.rerun_s == pytest.approx((5 + 3) / 120.0)
-    # segment 2 ran again in mode 1 (from its start to frame t), then in mode 2
-    np.testing.assert_allclose(first.rerun_s_by_mode,
-                               [0.0, 5 / 120.0, 3 / 120.0] + [0.0] * (modes - 3))
+    np.testing.assert_allclose(first.rerun_s_by_mode, rerun_s)
     later = 4 * every + 7  # an attempt got past segment 2, into trouble in segment 4
     _run_to(s, data, later)
     assert s.retry(data, later, steps=0, failed=True) == 4 * every + 1
@@ -186,10 +189,10 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     sweep = balance_search.SWEEP_MODES
     t = 2 * every + 5
     _run_to(s, data, t)
-    for _ in range(1, sweep):
+    for _ in sweep:
         assert s.retry(data, t, steps=0) == 2 * every + 1
         _run_to(s, data, t)
-    for mode in range(1, sweep):
+    for mode in sweep:
         assert s.retry(data, t, steps=0) == every + 1
         assert s.mode(every + 1) == mode and s.mode(t) == mode  # segment 2 inherits it
         _run_to(s, data, t)
@@ -199,7 +202,7 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     later = i * every + 5
     _run_to(s, data, later)
     assert s.retry(data, later, steps=0) == i * every + 1
-    assert s.mode(later) == 1 and s.mode(every + 1) == sweep - 1
+    assert s.mode(later) == sweep[0] and s.mode(every + 1) == sweep[-1]
 
 
 def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
@@ -211,10 +214,10 @@ def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
     modes, sweep = len(MODES), balance_search.SWEEP_MODES
     t = 2 * every + 5
     _run_to(s, data, t)
-    for _ in range(2 * (sweep - 1)):  # segment 2's modes in the sweep, then segment 1's
+    for _ in range(2 * len(sweep)):  # segment 2's modes in the sweep, then segment 1's
         assert s.retry(data, t, steps=0) is not None
         _run_to(s, data, t)
-    assert s.mode(every + 1) == sweep - 1 and sweep < modes
+    assert s.mode(every + 1) == sweep[-1] and set(sweep) < set(range(1, modes))
     # the sweep is spent: segment 1 back in the default mode, run from its start
     assert s.retry(data, t, steps=0) == every + 1
     assert s.mode(every + 1) == 0 and s.mode(t) == 0
@@ -239,7 +242,7 @@ def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
     _run_to(s, data, t)
     fail = t
     for segment in (5, 4, 3):  # each in its modes, each attempt in trouble in its own segment
-        for _ in range(1, sweep):
+        for _ in sweep:
             assert s.retry(data, fail, steps=0) == segment * every + 1
             fail = segment * every + 5
             _run_to(s, data, fail)
