@@ -40,7 +40,7 @@ SEARCH_BUDGET = 30.0
 #: ran 43 % of the rerun work and got past 13 % of the troubles, and mode 2 (gain 0.6, the
 #: swing foot 2 cm up) then ran 14 % and got past 6 %. Over issue 10's runs, seeds 0-20,
 #: each left out in turn made as many falls (8 whole, 0 cut); the last with 18 % fewer
-#: segments run again, mode 2 with as many whole and 15 % fewer cut, and 35_01 followed
+#: segments run again, mode 2 with 2 % more whole and 15 % fewer cut, and 35_01 followed
 #: closer (its median body error 52 -> 43.5 mm).
 SWEEP_MODES = (1, 3, 4)
 
@@ -256,8 +256,7 @@ class Search:
             if mode is not None:
                 break
             back -= 1
-        if (back < 0 or reach_from - back > MAX_BACKTRACK or back not in self.saved
-                or mode is None):
+        if mode is None or back not in self.saved:  # no mode left within reach
             return None, None
         return back, mode
 
