@@ -36,8 +36,9 @@ training the maps included); --full runs the whole protocol (200 pairs, windows 
 20 and 40 frames: about 4 minutes). The pairs of a smaller study are the first pairs of
 a larger one with the same seed, scored identically.
 
-The free-root test costs about a second of CPU per run (pairs x methods + real
-windows): --physics-pairs chooses how many of the pairs get it. It runs on a local
+The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
+pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
+the pairs get it. It runs on a local
 process pool, or on Ray (--executor ray: a local Ray instance, or an existing cluster
 with --address). Finished runs are kept in OUT/physics-partial.jsonl as they come: if
 runs fail or the command is stopped, the same command completes only what is missing.
