@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.kernels import tilt_ankle
+
 #: Damping of the ankle's least-squares turn (per radian squared): it keeps the solve
 #: regular where the hinge axes line up, and is small, so that the CMU ankle's second
 #: hinge, near vertical, still turns the foot about the shank by a few degrees where the
@@ -69,6 +71,10 @@ class SwingFootTilt:
             # row 2 of the body's rotation: the world z axis in the body's frame
             self.up[t] = data.xmat[self.foot_bodies].reshape(-1, 3, 3)[:, 2, :]
         self._damping = [DAMPING * np.eye(len(h)) for h in self.hinges]
+        # the compiled kernel loads now, not at the first step with a foot in the air
+        # (after the controller's clock has started)
+        tilt_ankle(data.xmat[self.foot_bodies[0]], self.up[0, 0], data.xaxis, self.hinges[0],
+                   self._damping[0], data.qpos, self.qpos_address[0], data.qpos.copy())
 
     def adjust(self, data, frame: int, q_ref, touching) -> None:
         """Set the ankle targets of every foot in the air in ``q_ref`` (in place).
@@ -85,11 +91,7 @@ class SwingFootTilt:
             (:meth:`controller.placement.FootPlacement.touching`).
         """
         for side, foot in enumerate(self.foot_bodies):
-            if touching[side]:
-                continue
-            now = data.xmat[foot].reshape(3, 3) @ self.up[frame, side]
-            turn = np.array((now[1], -now[0], 0.0))  # now x z
-            axes = data.xaxis[self.hinges[side]].T  # (3, k)
-            delta = np.linalg.solve(axes.T @ axes + self._damping[side], axes.T @ turn)
-            qadr = self.qpos_address[side]
-            q_ref[qadr] = data.qpos[qadr] + delta
+            if not touching[side]:
+                tilt_ankle(data.xmat[foot], self.up[frame, side], data.xaxis,
+                           self.hinges[side], self._damping[side], data.qpos,
+                           self.qpos_address[side], q_ref)

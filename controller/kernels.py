@@ -349,6 +349,38 @@ def move_point(jacp, dofs, move, damping, max_turn, q, qadr):
 
 
 @njit(cache=True, nogil=True)
+def tilt_ankle(foot_xmat, up, xaxis, hinges, damping, qpos, qadr, q):
+    """Set a swing ankle's targets ``q[qadr]`` (in place) to the angles that turn the foot
+    back to the reference's tilt (:mod:`controller.foot_tilt`): the state's ``qpos[qadr]``
+    plus the damped least squares ``delta`` of ``sum_k a_k delta_k = (R up) x z``.
+
+    Parameters
+    ----------
+    foot_xmat : ndarray, shape (9,)
+        The foot's orientation ``R`` (row-major).
+    up : ndarray, shape (3,)
+        The world vertical in the reference's foot frame.
+    xaxis : ndarray, shape (njnt, 3)
+        Every joint's axis, world frame; ``hinges`` (k,) the ankle's rows of it.
+    damping : ndarray, shape (k, k)
+    qpos, q : ndarray, shape (nq,)
+        The state's angles and the targets; ``qadr`` (k,) the ankle's addresses.
+
+    The products are the BLAS calls numpy makes for the same expressions, so the targets
+    are numpy's to the last bit.
+    """
+    now = foot_xmat.reshape(3, 3) @ up
+    turn = np.array((now[1], -now[0], 0.0))  # now x z
+    rows = np.empty((hinges.shape[0], 3))
+    for r in range(hinges.shape[0]):
+        rows[r] = xaxis[hinges[r]]
+    axes = rows.T.copy()
+    delta = np.linalg.solve(axes.T @ axes + damping, rows @ turn)
+    for c in range(qadr.shape[0]):
+        q[qadr[c]] = qpos[qadr[c]] + delta[c]
+
+
+@njit(cache=True, nogil=True)
 def _cholesky_solve(L, b):
     """``x`` with ``L L^T x = b``; ``L`` (n, n) lower triangular, ``b`` (n,)."""
     n = L.shape[0]

@@ -6,6 +6,9 @@ the floor is left alone."""
 import mujoco
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from controller import to_qpos
 from controller.foot_tilt import SwingFootTilt
@@ -87,3 +90,32 @@ def test_a_foot_on_the_floor_is_left_alone(setup):
     q_ref = q.copy()
     tilt.adjust(data, 50, q_ref, (True, True))
     np.testing.assert_array_equal(q_ref, q)
+
+
+@settings(max_examples=200, deadline=None)
+@given(rotation=arrays(np.float64, 3, elements=st.floats(-3.0, 3.0)),
+       up=arrays(np.float64, 3, elements=st.floats(-1.0, 1.0)),
+       axes=arrays(np.float64, (2, 3), elements=st.floats(-1.0, 1.0)))
+def test_the_compiled_ankle_turn_is_the_damped_least_squares(rotation, up, axes):
+    """The compiled step (:func:`controller.kernels.tilt_ankle`) is the module's damped
+    least squares, ``delta = (A^T A + damping I)^-1 A^T ((R up) x z)``, for any foot
+    orientation ``R`` and hinge axes ``A`` (columns)."""
+    from scipy.spatial.transform import Rotation
+
+    from controller.foot_tilt import DAMPING
+    from controller.kernels import tilt_ankle
+
+    R = Rotation.from_rotvec(rotation).as_matrix()
+    xaxis = np.zeros((5, 3))
+    hinges, qadr = np.array([1, 3]), np.array([4, 2])
+    xaxis[hinges] = axes
+    damping = DAMPING * np.eye(2)
+    qpos = np.linspace(0.1, 0.7, 7)
+    q = np.full(7, 9.0)
+    tilt_ankle(R.ravel(), up, xaxis, hinges, damping, qpos, qadr, q)
+    A = axes.T
+    turn = np.cross(R @ up, [0.0, 0.0, 1.0])
+    delta = np.linalg.solve(A.T @ A + damping, A.T @ turn)
+    np.testing.assert_allclose(q[qadr], qpos[qadr] + delta, rtol=1e-9, atol=1e-9)
+    untouched = np.setdiff1d(np.arange(7), qadr)
+    assert np.all(q[untouched] == 9.0)
