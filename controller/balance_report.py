@@ -106,9 +106,35 @@ class BalanceTracking:
             "wall_s_per_sim_s": w["wall_s_per_sim_s"],
             "raw_steps_per_step": run.raw_steps_per_step,
         }
+        out.update(self._by_search(up))
         out = {k: (round(v, 5) if isinstance(v, float) and math.isfinite(v) else v)
                for k, v in out.items()}
         out["torque_by_actuator"] = self._by_actuator(up)
+        return out
+
+    def _by_search(self, up) -> dict:
+        """The share of frames ``up`` run in a mode the search changed (not the default:
+        :func:`controller.balance_search.frame_modes`), and the joint and body errors over
+        the frames run in the default mode and over those the search changed (NaN where
+        there are none): where a part's error comes from."""
+        from controller.balance_search import frame_modes
+
+        run = self.run
+        searched = frame_modes(run.segment_modes, run.n_frames, run.fps)[up] != 0
+        joint, body = run.joint_error_deg[up], run.body_error_mm[up]
+
+        def rms(values):
+            values = values[np.isfinite(values)]
+            return float(np.sqrt(np.mean(values ** 2))) if values.size else math.nan
+
+        def mean(values):
+            values = values[np.isfinite(values)]
+            return float(np.mean(values)) if values.size else math.nan
+
+        out = {"search_mode_share": float(np.mean(searched)) if up.size else math.nan}
+        for name, frames in (("default_mode", ~searched), ("search_modes", searched)):
+            out[f"error_deg_rms_{name}"] = rms(joint[frames])
+            out[f"body_error_mm_mean_{name}"] = mean(body[frames])
         return out
 
     def _by_actuator(self, up) -> dict:

@@ -121,7 +121,7 @@ class Search:
         if not (math.isfinite(budget) and budget >= 0):
             raise ValueError(f"the search budget must be a number >= 0, not {given!r}")
         self.sim, self.n_frames = sim, n_frames
-        self.every = max(1, int(round(SEGMENT_S * fps)))
+        self.every = segment_frames(fps)
         self.sticky = int(round(STICKY_S / SEGMENT_S))
         self.ref_pelvis, self.ref_head = ref_heights_m
         self.pelvis_body, self.head_site = watched
@@ -304,6 +304,23 @@ class Search:
         self.retries += 1
         self.restart = segment * self.every + 1
         return self.restart
+
+
+def segment_frames(fps: float) -> int:
+    """Frames per :data:`SEGMENT_S` segment at ``fps``: frame ``t``'s steps (from frame
+    ``t - 1`` to ``t``) belong to segment ``(t - 1) // segment_frames(fps)``."""
+    return max(1, int(round(SEGMENT_S * fps)))
+
+
+def frame_modes(segment_modes, n_frames: int, fps: float) -> np.ndarray:
+    """The mode each frame was run in (the steps that led to it; frame 0: the first
+    segment's), int array (n_frames,), from :meth:`Search.modes` ``(segments,)``."""
+    segment_modes = np.asarray(segment_modes, dtype=int)
+    if not segment_modes.size:
+        return np.zeros(n_frames, dtype=int)
+    frames = np.arange(n_frames)
+    index = np.maximum(frames - 1, 0) // segment_frames(fps)
+    return segment_modes[np.minimum(index, segment_modes.size - 1)]
 
 
 def _next_mode(modes, current: int) -> int | None:

@@ -45,6 +45,13 @@ work: the muscles across it shortening, where a real muscle holds less than the 
 peak the strength is; ``null`` when the joint was never at its strength; the last key
 added within version 2, missing from older reports).
 
+Every part's figures of a free-root balance run also take its errors apart by where the
+search worked (added within version 2, missing from older reports): ``search_mode_share``
+(the share of the part's frames before any fall run in a mode the search changed, not the
+default: ``controller.balance_search.frame_modes``), and ``error_deg_rms`` and
+``body_error_mm_mean`` over the frames run in the default mode (``..._default_mode``) and
+over those the search changed (``..._search_modes``; ``null`` where there are none).
+
 ``settings.strength`` (added within version 2; readers of older reports take 1): every
 joint's torque limit was the strength tables' times this (``upm simulate --strength``).
 

@@ -162,7 +162,9 @@ def task_list(rows, seeds: int) -> list[Unit]:
 #: Figures of one run (of :meth:`controller.balance_report.BalanceTracking.run_summary`).
 RUN_FIELDS = ("fell", "fall_time_s", "ends_in_trouble", "error_deg_rms",
               "body_error_mm_mean", "root_drift_m", "heading_error_deg_peak",
-              "search_retries", "wall_s_per_sim_s", "raw_steps_per_step")
+              "search_retries", "wall_s_per_sim_s", "raw_steps_per_step",
+              "search_mode_share", "body_error_mm_mean_default_mode",
+              "body_error_mm_mean_search_modes")
 
 _WORKER: dict = {}
 
@@ -328,6 +330,12 @@ def row_summary(result: RobustnessResult, row: Row) -> dict:
         "ends_going_down": sum(bool(r["ends_in_trouble"]) for r in up),
         "standing_error_deg_rms": span(r["error_deg_rms"] for r in up),
         "standing_body_error_mm_mean": span(r["body_error_mm_mean"] for r in up),
+        # the same over the frames run in the default mode and over those the search
+        # changed (missing from runs checkpointed before these figures)
+        "standing_body_error_mm_mean_default_mode": span(
+            r.get("body_error_mm_mean_default_mode") for r in up),
+        "standing_body_error_mm_mean_search_modes": span(
+            r.get("body_error_mm_mean_search_modes") for r in up),
         "search_retries": span(r["search_retries"] for r in runs),
         "wall_s_per_sim_s": span(r["wall_s_per_sim_s"] for r in runs),
         "raw_steps_per_step": span(r["raw_steps_per_step"] for r in runs),

@@ -3,6 +3,8 @@ on the real clip 16_15 (and nothing touched on a clean clip), the reference put 
 floor, and the backtracking search's bookkeeping (which segment is run again in which
 mode, within its reach and budget)."""
 
+import math
+
 import mujoco
 import numpy as np
 import pytest
@@ -10,6 +12,7 @@ import pytest
 from controller import balance_search, to_qpos
 from controller.balance import follow
 from controller.balance_control import MODES, torque_model
+from controller.balance_report import BalanceTracking
 from controller.balance_run import replay
 from controller.dropouts import fill_dropouts
 from controller.qpos import joint_layout
@@ -83,6 +86,21 @@ def test_search_retries_then_backtracks(search):
     last_sticky = 1 + s.sticky
     assert s.modes()[:last_sticky + 2].tolist() == [0] + [first] * s.sticky + [first, 0]
     assert s.retries == len(sweep) + 1
+
+
+def test_each_frame_reads_the_mode_its_segment_ran_in(search):
+    """The per-frame modes the report splits errors by are the search's own: frame t's
+    steps ran in mode ``Search.mode(t)``."""
+    s, data, every = search
+    t = 2 * every + 5
+    _run_to(s, data, t)
+    s.retry(data, t, steps=0)
+    s.retry(data, t, steps=0)
+    modes = balance_search.frame_modes(s.modes(), s.n_frames, s.fps)
+    assert modes.shape == (s.n_frames,)
+    assert modes[1:].tolist() == [s.mode(f) for f in range(1, s.n_frames)]
+    assert modes[0] == modes[1] and set(modes.tolist()) == {0, balance_search.SWEEP_MODES[1]}
+    assert balance_search.frame_modes([], 3, s.fps).tolist() == [0, 0, 0]
 
 
 def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
@@ -303,4 +321,37 @@ def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk,
     assert run.segment_modes.max() > 0
     again = replay(model02, run)
     np.testing.assert_allclose(again, run.qpos, atol=1e-9, equal_nan=True)
+    # the report takes its errors apart by the frames the search changed and the rest
+    # (here the search changed the mode of every segment from the first trouble on)
+    figures = BalanceTracking(run).run_summary()
+    modes = balance_search.frame_modes(run.segment_modes, run.n_frames, run.fps)
+    up = np.flatnonzero(np.isfinite(run.qpos[:, 0]))
+    if run.fall_frame is not None:
+        up = up[up < run.fall_frame]
+    searched = modes[up] != 0
+    assert searched.any()
+    assert figures["search_mode_share"] == pytest.approx(searched.mean(), abs=1e-5)
+    body, joint = run.body_error_mm[up], run.joint_error_deg[up]
+    assert figures["body_error_mm_mean_search_modes"] == pytest.approx(
+        body[searched].mean(), abs=1e-4)
+    assert figures["error_deg_rms_search_modes"] == pytest.approx(
+        np.sqrt(np.mean(joint[searched] ** 2)), abs=1e-4)
+    if searched.all():  # no frame in the default mode: no figure, not a zero
+        assert math.isnan(figures["body_error_mm_mean_default_mode"])
+        assert math.isnan(figures["error_deg_rms_default_mode"])
+    else:
+        assert figures["body_error_mm_mean_default_mode"] == pytest.approx(
+            body[~searched].mean(), abs=1e-4)
+
+
+def test_a_run_without_search_is_all_in_the_default_mode(model02, walk):
+    """02_01's first second needs no search: every frame in the default mode, whose
+    errors are the whole run's."""
+    run = follow(model02, to_qpos(model02, walk)[:121], walk.fps)
+    assert run.retries == 0 and not run.segment_modes.any()
+    figures = BalanceTracking(run).run_summary()
+    assert figures["search_mode_share"] == 0.0
+    assert figures["body_error_mm_mean_default_mode"] == figures["body_error_mm_mean"]
+    assert figures["error_deg_rms_default_mode"] == figures["error_deg_rms"]
+    assert math.isnan(figures["body_error_mm_mean_search_modes"])
 
