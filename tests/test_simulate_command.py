@@ -152,6 +152,8 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     assert sum(r["retries"] for r in troubles) == free["search_retries"]
     assert {r["outcome"] for r in troubles} <= {"got past"}
     assert ("search: " in printed) == bool(troubles)
+    assert 0.0 <= free["search_mode_share"] <= 1.0
+    assert ("error by mode: " in printed) == bool(free["search_mode_share"])
     # each torque limit: how often the joint was at its strength, its peak and mean
     by_actuator = free["torque_by_actuator"]
     model = load_model(catalog_model_path(catalog, "02_01"))
@@ -300,6 +302,24 @@ def test_the_search_is_summed_up_in_one_line():
         "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
         "again; got past 1 (seconds run again by the mode tried, 0-5: 0.5 / 5.0 / 7.0 / "
         "3.0 / 14.2 / 5.5); gave up at 1.07 s (pelvis low and tilted: budget spent)")
+
+
+def test_the_error_by_mode_in_one_line():
+    from upm.commands.simulate import _by_mode_line
+
+    free = {"search_mode_share": 0.30612, "error_deg_rms_search_modes": 6.04,
+            "body_error_mm_mean_search_modes": 81.6, "error_deg_rms_default_mode": 3.1,
+            "body_error_mm_mean_default_mode": 31.2}
+    assert _by_mode_line(free) == (
+        "  error by mode: the 31 % of the frames the search changed 6.0 deg / 82 mm, the "
+        "rest (the default mode) 3.1 deg / 31 mm")
+    # every frame changed: no default-mode figure
+    free.update(search_mode_share=1.0, error_deg_rms_default_mode=None,
+                body_error_mm_mean_default_mode=None)
+    assert _by_mode_line(free).endswith("the rest (the default mode) -")
+    # no search, or a report from before the split: no line
+    assert _by_mode_line({"search_mode_share": 0.0}) == ""
+    assert _by_mode_line({}) == ""
 
 
 def test_the_joints_most_often_at_full_strength_in_one_line():

@@ -283,6 +283,23 @@ def _search_line(troubles: list) -> str:
     return line
 
 
+def _by_mode_line(free: dict) -> str:
+    """Where the free run's error comes from, in one line: the frames run in a mode the
+    search changed against those in the default mode ("" when the report has no such
+    split, or no frame was changed)."""
+    share = free.get("search_mode_share")
+    if not share:
+        return ""
+
+    def errors(part: str) -> str:
+        deg, mm = free.get(f"error_deg_rms_{part}"), free.get(f"body_error_mm_mean_{part}")
+        return "-" if deg is None or mm is None else f"{deg:.1f} deg / {mm:.0f} mm"
+
+    return (f"  error by mode: the {100 * share:.0f} % of the frames the search changed "
+            f"{errors('search_modes')}, the rest (the default mode) "
+            f"{errors('default_mode')}")
+
+
 def _strength_line(by_actuator: dict, most: int = 3) -> str:
     """The actuators most often at their strength, in one line ("" when none is), each
     with the share of those frames at which its joint turned the way it pushed
@@ -346,6 +363,9 @@ def _print_summary(report: dict, json_path, csv_path) -> None:
                   "begins: --cut matched joins each where the next one's gait phase matches)")
         if free.get("search_troubles"):
             print(_search_line(free["search_troubles"]))
+            split = _by_mode_line(free)
+            if split:
+                print(split)
         strength = _strength_line(free.get("torque_by_actuator", {}))
         if strength:
             print(strength)
