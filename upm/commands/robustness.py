@@ -11,9 +11,10 @@ runs: about 9 minutes on 2 cores). Sequences joined by upm or feasible use --map
 a UPM trained on the train split of clips.csv (cached outside the repository).
 
 Per run the figures of 'upm simulate --modes free' (fell and when, ends going down, joint
-and body error, drift, heading, search retries, wall s per simulated s and raw mj_steps per
-step: runs side by side, so read the cost with 'upm simulate' or 'upm bench'); per row, how
-many runs fell and when. Written to --out: robustness.json (settings, software versions,
+and body error, the body error in the frames the search changed and in the rest, drift,
+heading, search retries, wall s per simulated s and raw mj_steps per step: runs side by
+side, so read the cost with 'upm simulate' or 'upm bench'); per row, how many runs fell
+and when. Written to --out: robustness.json (settings, software versions,
 per row, every run), robustness.md (the table) and robustness.png (the falls on each row's
 timeline). Finished runs are kept in robustness-partial.jsonl as they
 come: the same command, stopped or failed, completes only what is missing.
