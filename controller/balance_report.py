@@ -117,24 +117,16 @@ class BalanceTracking:
         :func:`controller.balance_search.frame_modes`), and the joint and body errors over
         the frames run in the default mode and over those the search changed (NaN where
         there are none): where a part's error comes from."""
+        from controller.balance_run import finite_stat, root_mean
         from controller.balance_search import frame_modes
 
         run = self.run
         searched = frame_modes(run.segment_modes, run.n_frames, run.fps)[up] != 0
         joint, body = run.joint_error_deg[up], run.body_error_mm[up]
-
-        def rms(values):
-            values = values[np.isfinite(values)]
-            return float(np.sqrt(np.mean(values ** 2))) if values.size else math.nan
-
-        def mean(values):
-            values = values[np.isfinite(values)]
-            return float(np.mean(values)) if values.size else math.nan
-
-        out = {"search_mode_share": float(np.mean(searched)) if up.size else math.nan}
+        out = {"search_mode_share": finite_stat(searched, np.mean)}
         for name, frames in (("default_mode", ~searched), ("search_modes", searched)):
-            out[f"error_deg_rms_{name}"] = rms(joint[frames])
-            out[f"body_error_mm_mean_{name}"] = mean(body[frames])
+            out[f"error_deg_rms_{name}"] = finite_stat(joint[frames] ** 2, root_mean)
+            out[f"body_error_mm_mean_{name}"] = finite_stat(body[frames], np.mean)
         return out
 
     def _by_actuator(self, up) -> dict:

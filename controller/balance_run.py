@@ -211,6 +211,19 @@ def replay(model, run: BalanceRun) -> np.ndarray:
     return out
 
 
+def finite_stat(values, how) -> float:
+    """``how`` (a reduction of an array to a number) of the finite ``values``, as a float;
+    NaN when none is finite."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values)]
+    return float(how(values)) if values.size else math.nan
+
+
+def root_mean(squares) -> float:
+    """The square root of the mean of ``squares`` (RMS, given the squares)."""
+    return np.sqrt(np.mean(squares))
+
+
 def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[str, float]:
     """Figures of frames ``start_frame`` to ``stop_frame - 1`` of a run.
 
@@ -236,24 +249,18 @@ def window_summary(run: BalanceRun, start_frame: int, stop_frame: int) -> dict[s
         up = up[up < run.fall_frame]
     fell = run.fall_frame is not None and run.fall_frame <= stop - 1
 
-    def stat(values, how):
-        values = np.asarray(values, dtype=float)
-        values = values[np.isfinite(values)]
-        return float(how(values)) if values.size else math.nan
-
     return {
         "fell": 1.0 if fell else 0.0,
         "fall_time_s": run.fall_time_s if fell else math.nan,
-        "joint_error_deg_rms": stat(run.joint_error_deg[up] ** 2,
-                                    lambda v: np.sqrt(np.mean(v))),
-        "body_error_mm_mean": stat(run.body_error_mm[up], np.mean),
-        "body_error_mm_peak": stat(run.body_error_mm[up], np.max),
-        "root_drift_m": stat(run.root_drift_m[up], np.max),
-        "heading_error_deg_peak": stat(np.abs(run.heading_error_deg[up]), np.max),
-        "com_height_error_m": stat(np.abs(run.com_height_error_m[up]), np.mean),
-        "torque_saturation_share": stat(run.torque_saturated[up].ravel(), np.mean),
-        "contact_force_peak_bw": stat(run.contact_force_n[up] / run.weight_n, np.max),
-        "torque_peak_nm": stat(np.abs(run.torque_nm[up]).ravel(), np.max),
+        "joint_error_deg_rms": finite_stat(run.joint_error_deg[up] ** 2, root_mean),
+        "body_error_mm_mean": finite_stat(run.body_error_mm[up], np.mean),
+        "body_error_mm_peak": finite_stat(run.body_error_mm[up], np.max),
+        "root_drift_m": finite_stat(run.root_drift_m[up], np.max),
+        "heading_error_deg_peak": finite_stat(np.abs(run.heading_error_deg[up]), np.max),
+        "com_height_error_m": finite_stat(np.abs(run.com_height_error_m[up]), np.mean),
+        "torque_saturation_share": finite_stat(run.torque_saturated[up].ravel(), np.mean),
+        "contact_force_peak_bw": finite_stat(run.contact_force_n[up] / run.weight_n, np.max),
+        "torque_peak_nm": finite_stat(np.abs(run.torque_nm[up]).ravel(), np.max),
         "trouble_time_s": float(np.count_nonzero(run.trouble[up])) / run.fps,
         "ends_in_trouble": float(run.trouble[up[-1]]) if up.size else math.nan,
         "wall_s_per_sim_s": run.wall_s_per_sim_s,
