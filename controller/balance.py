@@ -22,9 +22,7 @@ simulated again, and with ``processes=2`` the rollouts run side by side
 into trouble (pelvis or head well below the reference's, or tilted), a backtracking search
 (:mod:`controller.balance_search`, after SAMCON) runs the last segments again in other
 modes (:data:`controller.balance_control.MODES`: placement gain, swing clearance, which
-swing-foot contacts the plan leans on) from their saved states; with ``processes=2`` the
-helper simulates the attempt the search would make next while this process runs the
-current one (:mod:`controller.search_ahead`: the same run either way). The controller's
+swing-foot contacts the plan leans on) from their saved states. The controller's
 balance is thin (which walks it gets through changes with these choices), and the search
 buys robustness where it is needed, at the cost of the segments it runs again
 (``simulated_steps``).
@@ -86,11 +84,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         :data:`controller.balance_search.SEARCH_BUDGET`; 0: no search).
     processes : int
         1 or 2: the foot-placement gain's lookahead rollouts run one after the other, or
-        side by side in this process and a forked helper (:mod:`controller.lookahead`),
-        which also simulates the search's next attempt ahead while the search runs
-        (:mod:`controller.search_ahead`). The run is the same either way; 2 costs less
-        wall time where 2 cores are free (not inside a pool that already keeps every
-        core busy).
+        side by side in this process and a forked helper (:mod:`controller.lookahead`).
+        The run is the same either way; 2 costs less wall time where 2 cores are free
+        (not inside a pool that already keeps every core busy).
 
     Returns
     -------
@@ -106,7 +102,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.pose_error import reference_errors
     from controller.qpos import free_joint
     from controller.raw_clock import RawStepClock
-    from controller.search_ahead import SearchAhead
     from controller.tracking import MAX_STEP_S, physics_substeps
     from controller.wbc import WholeBodyID
     from upm.progress import progress as progress_bar
@@ -155,19 +150,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     del scratch
     search = Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
                     (pelvis_body, head_site), search_budget)
-    selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes,
-                             stop=search.troubled)
+    selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
-    ahead = (SearchAhead(selector.lookahead, sim, search.every, substeps, n_frames, MODES)
-             if selector is not None and processes == 2 and search.budget_steps > 0
-             else None)
-
-    def restarted(back: int) -> None:
-        if selector is not None:
-            selector.forget()
-        if ahead is not None:
-            segment = (back - 1) // search.every
-            ahead.restarted(search, segment, search.mode(back), search.quiet_until == 0)
 
     selected = {}  # the default mode's gain from each selection's start frame on
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
@@ -179,9 +163,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         t = 1
         while t < n_frames:
             raw.tick()
-            if (search.enter(data, t) and ahead is not None and t > search.quiet_until
-                    and search.mode(t) > 0):
-                ahead.entered(search, t)
+            search.enter(data, t)
             mode = MODES[search.mode(t)]
             gain = mode.placement_gain
             recorded = None
@@ -194,8 +176,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 recorded = selector.recorded(t, gain)
             elif selector is not None:
                 selector.forget()
-            if recorded is None and ahead is not None:
-                recorded = ahead.frame(t)
             if recorded is not None:
                 # a rollout ahead simulated this frame already, from the same state
                 state, ctrl[(t - 1) * substeps:t * substeps], tau, userdata = recorded
@@ -216,7 +196,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     t, fall, stop_frame = back, None, n_frames
                     for first in [f for f in selected if f >= back - 1]:
                         del selected[first]
-                    restarted(back)
+                    if selector is not None:
+                        selector.forget()
                     continue
                 if failed:
                     diverged = stop_frame = t

@@ -106,9 +106,8 @@ class BalanceRun:
         Physics steps taken in all, the search's included (``steps`` of them are the
         run's own), counting those taken from a recorded rollout.
     lookahead_steps : int
-        Physics steps the rollouts ahead simulated (both processes): the foot-placement
-        gain's lookahead and, on two processes, the search's guessed next attempts
-        (:mod:`controller.search_ahead`).
+        Physics steps the foot-placement gain's lookahead rollouts simulated (both
+        processes).
     reused_steps : int
         Of ``simulated_steps``, those taken from a recorded rollout instead of simulated
         again (all but the last step of each frame taken: that one is taken again to

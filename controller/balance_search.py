@@ -139,10 +139,9 @@ class Search:
     def _segment(self, t: int) -> int:
         return (t - 1) // self.every
 
-    def enter(self, data, t: int) -> bool:
-        """Save the state at the start of a segment (before frame ``t``'s steps); returns
-        whether it was saved now (a segment entered for the first time since the run was
-        last restarted before it)."""
+    def enter(self, data, t: int) -> None:
+        """Save the state at the start of a segment (before frame ``t``'s steps), if the
+        segment is entered for the first time since the run was last restarted before it."""
         import mujoco
 
         if (t - 1) % self.every == 0:
@@ -151,8 +150,6 @@ class Search:
                 copy_ = mujoco.MjData(self.sim)
                 mujoco.mj_copyData(copy_, self.sim, data)
                 self.saved[i] = copy_
-                return True
-        return False
 
     def _mode_of(self, i: int, choice: dict | None = None) -> int:
         """Segment ``i``'s mode: its own choice, else that of the latest segment before
@@ -259,14 +256,6 @@ class Search:
         if mode is None or back not in self.saved:  # no mode left within reach
             return None, None
         return back, mode
-
-    def next_attempt(self, t: int):
-        """The attempt a retry at frame ``t`` would start, if the budget is not spent by
-        then: ``(segment, its mode, its saved start state)``, or None."""
-        back, mode = self._back(t)
-        if back is None:
-            return None
-        return back, mode, self.saved[back]
 
     def _give_up(self, data, t: int, spent: bool) -> int | None:
         best_t, best_choice = self.best

@@ -28,15 +28,13 @@ class GainSelector:
     run on ``processes`` processes (:class:`controller.lookahead.Lookahead`)."""
 
     def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
-                 processes: int = 1, stop=None):
-        """``stop``: where a rollout run ahead for the search ends
-        (:meth:`controller.lookahead.Lookahead.send`)."""
+                 processes: int = 1):
         from controller.lookahead import Lookahead, Recording
 
         self.n_frames = n_frames
         self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
         self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
-        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes, stop)
+        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes)
         # on one process the chosen rollout is recorded whole: the next choice goes on
         # from its second half instead of simulating it again
         self.resumes = processes == 1

@@ -149,7 +149,7 @@ def _warnings(data) -> int:
 
 def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
                  ref_pelvis_m, pelvis_body: int,
-                 recording: Recording | None = None, stop=None,
+                 recording: Recording | None = None,
                  resume: bool = False) -> tuple[float, int]:
     """How far one rollout strays: the sum over frames ``frame + 1 .. last`` of how far
     the pelvis is below the reference's (m, zero when above), one minus its up axis's
@@ -172,9 +172,6 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
     pelvis_body : int
     recording : Recording, optional
         Keeps the rollout's first frames, up to its capacity.
-    stop : callable, optional
-        ``stop(data, t) -> bool``: the rollout ends after the first frame ``t`` for which
-        it is true (that frame recorded).
     resume : bool
         ``recording`` already holds this rollout's first frames (from ``frame`` on, with
         this gain): they are not simulated again, the rollout goes on after the last of
@@ -222,8 +219,6 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
         steps += control.substeps
         if not np.all(np.isfinite(scratch.qpos)):
             return math.inf, steps
-        if stop is not None and stop(scratch, t):
-            return cost, steps
         low = ref_pelvis_m[t] - scratch.xpos[pelvis_body, 2]
         tilt = 1.0 - scratch.xmat[pelvis_body, 8]
         upright = max(0.0, low) + tilt
@@ -263,8 +258,7 @@ class Lookahead:
         at the first call that needs it and ends with :meth:`close` (or this process).
     """
 
-    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1,
-                 stop=None):
+    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1):
         import mujoco
 
         if processes not in (1, 2):
@@ -276,7 +270,6 @@ class Lookahead:
         self.ref_pelvis_m = ref_pelvis_m
         self.pelvis_body = pelvis_body
         self.processes = processes
-        self.stop = stop
         self.scratch = mujoco.MjData(control.sim)
         self._helper = None
         self._pipe = None
@@ -300,14 +293,12 @@ class Lookahead:
         helped = self.processes == 2 and len(gains) > 1
         if resume is not None and (helped or recordings is None):
             raise ValueError("a rollout is resumed on one process, from its recording")
-        self.receive()  # a rollout started ahead and not wanted any more
         local = [here] if helped else list(range(len(gains)))
         if helped:
             pipe = self._start()
             others = tuple(g for i, g in enumerate(gains) if i != here)
             capacity = None if recordings is None else recordings[here].capacity
-            pipe.send((integration_state(sim, data), frame, last, others, mode, capacity,
-                       False))
+            pipe.send((integration_state(sim, data), frame, last, others, mode, capacity))
             self._busy = True
         out = [math.nan] * len(gains)
         for i in local:
@@ -329,49 +320,19 @@ class Lookahead:
                     recordings[i].unpack(packed[n])
         return out
 
-    def send(self, data, frame: int, last: int, gain: float, mode,
-             recording: Recording) -> None:
-        """Start one recorded rollout from ``data``'s state in the helper (two processes
-        only), to be taken with :meth:`receive`; this process goes on meanwhile. It ends
-        early where the ``stop`` test given at construction says so."""
-        if self.processes != 2:
-            raise ValueError("a rollout runs ahead only on 2 processes")
-        self.receive()
-        pipe = self._start()
-        pipe.send((integration_state(self.control.sim, data), frame, last, (gain,), mode,
-                   recording.capacity, True))
-        self._busy = True
-
-    def receive(self, recording: Recording | None = None) -> bool:
-        """Wait for the rollout :meth:`send` started, if one is outstanding, and unpack
-        its recording into ``recording`` (None: drop it). Returns whether there was one."""
-        if not self._busy:
-            return False
-        reply = self._pipe.recv()
-        self._busy = False
-        if isinstance(reply, BaseException):
-            raise reply
-        _, steps, packed = reply
-        self.steps += steps
-        if recording is not None:
-            recording.unpack(packed[0])
-        return True
-
-    def _cost(self, frame, last, gain, mode, recording=None, stop=None,
+    def _cost(self, frame, last, gain, mode, recording=None,
               resume: bool = False) -> float:
         cost, steps = rollout_cost(self.control, self.scratch, frame, last, gain, mode,
-                                   self.ref_pelvis_m, self.pelvis_body, recording, stop,
-                                   resume)
+                                   self.ref_pelvis_m, self.pelvis_body, recording, resume)
         self.steps += steps
         return cost
 
-    def _cost_from(self, state, frame, last, gain, mode, recording=None,
-                   stop=None) -> float:
+    def _cost_from(self, state, frame, last, gain, mode, recording=None) -> float:
         import mujoco
 
         mujoco.mj_setState(self.control.sim, self.scratch, state,
                            mujoco.mjtState.mjSTATE_INTEGRATION)
-        return self._cost(frame, last, gain, mode, recording, stop)
+        return self._cost(frame, last, gain, mode, recording)
 
     def _start(self):
         if self._helper is None:
@@ -394,8 +355,7 @@ class Lookahead:
                 return
             if job is None:
                 return
-            state, frame, last, gains, mode, capacity, stops = job
-            stop = self.stop if stops else None
+            state, frame, last, gains, mode, capacity = job
             try:
                 before = self.steps
                 if capacity is None:
@@ -407,7 +367,7 @@ class Lookahead:
                                                      self.control.substeps)
                                            for _ in range(len(gains))]
                     recordings = recordings_here[:len(gains)]
-                costs = [self._cost_from(state, frame, last, g, mode, r, stop)
+                costs = [self._cost_from(state, frame, last, g, mode, r)
                          for g, r in zip(gains, recordings, strict=True)]
                 packed = [None if r is None else r.packed() for r in recordings]
                 pipe.send((costs, self.steps - before, packed))

@@ -55,6 +55,26 @@ def test_a_whole_walk_is_the_same_however_its_frames_are_computed(model02, walk,
         np.testing.assert_array_equal(run.qpos, one.qpos)
 
 
+def test_a_walk_the_search_works_on_is_the_same_on_two_processes(catalog):
+    """35_01, where the search runs 17 segments again: the restarts drop what the helper's
+    rollouts recorded, and the run and the search's counts are the same on two processes
+    as on one, bit for bit."""
+    from humanoid_xml import build_mjcf
+
+    motion = catalog.load("35_01")
+    model = mujoco.MjModel.from_xml_string(build_mjcf(catalog.skeleton("35")))
+    qpos = to_qpos(model, motion)
+    one = follow(model, qpos, motion.fps, processes=1)
+    two = follow(model, qpos, motion.fps, processes=2)
+    assert one.retries == two.retries > 10
+    np.testing.assert_array_equal(one.ctrl, two.ctrl)
+    np.testing.assert_array_equal(one.qpos, two.qpos)
+    np.testing.assert_array_equal(one.segment_modes, two.segment_modes)
+    # the search's budget counts the same steps either way
+    assert one.simulated_steps == two.simulated_steps
+    assert not multiprocessing.active_children()
+
+
 @pytest.mark.parametrize("processes", [1, 2])
 def test_frames_taken_from_the_lookahead_are_the_frames_simulated(model02, short_walk,
                                                                    monkeypatch, processes):

@@ -14,8 +14,7 @@
   seconds per wall second, against a bare ``mj_step`` loop replaying the torques it
   applied on the same torque-actuated model (the same physics without the control): the
   ratio is what the whole-body QP costs, in raw ``mj_step`` equivalents per step; on one
-  process, and (keys ``..._2proc_``) with its lookahead rollouts and the search's
-  attempts guessed ahead on two (the same run);
+  process, and (keys ``..._2proc_``) with its lookahead rollouts on two (the same run);
 - (full run only) the kinematic checks of every frame of every clip, reading included.
 """
 
