@@ -55,8 +55,9 @@ def settings(tracking_modes=(), controller: str = "balance",
                 "floor; whole-body inverse-dynamics QP per physics step (floor contacts "
                 "in friction pyramids, no root force, joint strength limits), torque "
                 "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
-                "every 0.5 s, a backtracking search over controller modes where the "
-                "character gets into trouble; controller.balance"
+                "every 0.5 s (0.25 s where they stray), a backtracking search over "
+                "controller modes where the character gets into trouble; "
+                "controller.balance"
                 if controller == "balance" else "position servos alone (open loop)"),
             "body_error": "mean distance of the joint centres from the reference's, each "
                           "relative to its pelvis and heading (drift reported apart)",

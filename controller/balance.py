@@ -13,9 +13,10 @@ height so that its first frame's lowest point is :data:`START_DEPTH_M` into the 
 (mocap feet hover by centimetres), and every standing frame grounded
 (:mod:`controller.grounding`).
 
-Every 0.5 s the foot-placement gain is chosen by rolling the same controller out 1 s ahead
-from a copy of the state (``mj_copyData``) with each gain and keeping the one whose pelvis
-stays nearest the reference's height and upright (:mod:`controller.gain_selection`); the
+Every 0.5 s (0.25 s after a choice whose rollout strays) the foot-placement gain is chosen
+by rolling the same controller out 1 s ahead from a copy of the state (``mj_copyData``)
+with each gain and keeping the one whose pelvis stays nearest the reference's height and
+upright (:mod:`controller.gain_selection`); the
 chosen gain's rollout is the run's next frames, which are taken from it rather than
 simulated again, and with ``processes=2`` the rollouts run side by side
 (:mod:`controller.lookahead`: the same run either way). Where the character still gets
@@ -153,7 +154,6 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
 
-    selected = {}  # the default mode's gain from each selection's start frame on
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
     clock = time.perf_counter()
@@ -168,11 +168,7 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
             gain = mode.placement_gain
             recorded = None
             if selector is not None and search.mode(t) == 0:
-                # the default mode's gain, chosen by lookahead (once per start frame)
-                first = (t - 1) - (t - 1) % selector.every_frames
-                if first not in selected:
-                    selected[first] = selector.choose(data, first) if first == t - 1 else gain
-                gain = selected[first]
+                gain = selector.gain_at(data, t, gain)  # chosen by lookahead
                 recorded = selector.recorded(t, gain)
             elif selector is not None:
                 selector.forget()
@@ -194,10 +190,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                 back = search.retry(data, t, steps, failed=failed)
                 if back is not None:
                     t, fall, stop_frame = back, None, n_frames
-                    for first in [f for f in selected if f >= back - 1]:
-                        del selected[first]
                     if selector is not None:
-                        selector.forget()
+                        selector.went_back(back)
                     continue
                 if failed:
                     diverged = stop_frame = t

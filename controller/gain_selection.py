@@ -3,7 +3,9 @@
 Every :data:`SELECT_EVERY_S` the gain is chosen among :data:`SELECT_GAINS` by rolling the
 same controller out :data:`LOOKAHEAD_S` ahead from a copy of the state and keeping the
 gain whose pelvis stays nearest the reference's height and upright
-(:mod:`controller.lookahead`).
+(:mod:`controller.lookahead`). Where even the chosen gain's rollout strays (its cost over
+:data:`REFINE_COST`) the gain is chosen again half-way to the next choice: the body is
+heading for trouble, and a choice from a state 0.25 s on sees it sooner.
 """
 
 from __future__ import annotations
@@ -16,12 +18,17 @@ from controller.balance_control import MODES
 SELECT_GAINS = (0.3, 0.6)
 #: ... every this many seconds ...
 SELECT_EVERY_S = 0.5
-#: ... each rolled out this far ahead.
+#: ... each rolled out this far ahead ...
 LOOKAHEAD_S = 1.0
+#: ... and chosen again half-way to the next choice where the chosen gain's rollout cost
+#: more than this (:func:`controller.lookahead.rollout_cost`: a clean 1 s of a walk costs
+#: about 1, mostly the pace's error; one heading for a fall, tens).
+REFINE_COST = 1.5
 
 
 class GainSelector:
-    """Every :data:`SELECT_EVERY_S`, the foot-placement gain of :data:`SELECT_GAINS` whose
+    """Every :data:`SELECT_EVERY_S` (and half-way on where the choice's rollout cost more
+    than :data:`REFINE_COST`), the foot-placement gain of :data:`SELECT_GAINS` whose
     :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
     pelvis nearest the reference's height and upright, and the pace nearest the
     reference's (:func:`controller.lookahead.rollout_cost`); the first on ties. The rollouts
@@ -45,6 +52,36 @@ class GainSelector:
         self.chain = None
         self.last_choice = 0
         self.last_cost = math.inf
+        # per choice's start frame, the gain from it on and whether it is chosen again
+        # half-way to the next
+        self._gains = {}
+        self._refined = {}
+
+    def gain_at(self, data, t: int, fallback: float) -> float:
+        """The default mode's gain for frame ``t`` (``data``: the state after frame
+        ``t - 1``). It is chosen (:meth:`choose`) at the frame its choice starts from when
+        the run passes that frame in the default mode; a run that comes to a choice's
+        span later (after the search's other modes, or having gone back into it) takes
+        ``fallback`` for it."""
+        first = (t - 1) - (t - 1) % self.every_frames
+        half = first + self.every_frames // 2
+        if t - 1 >= half and self._refined.get(first, False):
+            first = half
+        if first not in self._gains:
+            if first == t - 1:
+                self._gains[first] = self.choose(data, first)
+                self._refined[first] = self.last_cost > REFINE_COST
+            else:
+                self._gains[first] = fallback
+        return self._gains[first]
+
+    def went_back(self, frame: int) -> None:
+        """The run goes back to frame ``frame``: the choices from ``frame - 1`` on, and
+        everything recorded, are forgotten."""
+        for first in [f for f in self._gains if f >= frame - 1]:
+            del self._gains[first]
+            self._refined.pop(first, None)
+        self.forget()
 
     def choose(self, data, frame: int) -> float:
         """The gain from frame ``frame`` on (``data``: the state after it). Every gain's
