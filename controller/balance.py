@@ -16,17 +16,16 @@ height so that its first frame's lowest point is :data:`START_DEPTH_M` into the 
 Every 0.5 s (0.25 s after a choice whose rollout strays) the foot-placement gain is chosen
 by rolling the same controller out 1 s ahead from a copy of the state (``mj_copyData``)
 with each gain and keeping the one whose pelvis stays nearest the reference's height and
-upright (:mod:`controller.gain_selection`); the
-chosen gain's rollout is the run's next frames, which are taken from it rather than
-simulated again, and with ``processes=2`` the rollouts run side by side
-(:mod:`controller.lookahead`: the same run either way). Where the character still gets
-into trouble (pelvis or head well below the reference's, or tilted), a backtracking search
-(:mod:`controller.balance_search`, after SAMCON) runs the last segments again in other
-modes (:data:`controller.balance_control.MODES`: placement gain, swing clearance, which
-swing-foot contacts the plan leans on) from their saved states. The controller's
-balance is thin (which walks it gets through changes with these choices), and the search
-buys robustness where it is needed, at the cost of the segments it runs again
-(``simulated_steps``).
+upright (:mod:`controller.gain_selection`); the chosen gain's rollout is the run's next
+frames, which are taken from it rather than simulated again, and with ``processes=2`` the
+rollouts run side by side (:mod:`controller.lookahead`: the same run either way). Where
+the character still gets into trouble (pelvis or head well below the reference's, or
+tilted), a backtracking search (:mod:`controller.balance_search`, after SAMCON) runs the
+last segments again in other modes (:data:`controller.balance_control.MODES`: placement
+gain, swing clearance, which swing-foot contacts the plan leans on) from their saved
+states. The controller's balance is thin (which walks it gets through changes with these
+choices), and the search buys robustness where it is needed, at the cost of the segments
+it runs again (``simulated_steps``).
 
 The run is a :class:`controller.balance_run.BalanceRun`: the simulated state and figures
 frame by frame, and the torques applied at every step, which
