@@ -101,6 +101,26 @@ def parse_row(text: str) -> Row:
     return Row(pieces, method)
 
 
+def parse_rows(texts, clip_names) -> list[Row]:
+    """The rows of ``--rows``: each text by :func:`parse_row`, or ``["all"]``: every clip
+    of ``clip_names`` (the catalog's, in its order) as a row of its own.
+
+    Raises
+    ------
+    upm.errors.UsageError
+        For a malformed row, ``all`` beside other rows, or a row given twice.
+    """
+    texts = [t.strip() for t in texts]
+    if "all" in texts:
+        if len(texts) > 1:
+            raise UsageError("--rows all stands alone: every clip of the data, once each")
+        return [Row((name,)) for name in clip_names]
+    rows = [parse_row(text) for text in texts]
+    if len(set(rows)) != len(rows):
+        raise UsageError("--rows: a row is repeated")
+    return rows
+
+
 @dataclass(frozen=True)
 class Settings:
     """What every run of a robustness study shares (the figures depend on these).

@@ -13,10 +13,12 @@ from eval.robustness import (
     Row,
     Settings,
     parse_row,
+    parse_rows,
     reference,
     run_robustness,
     summed_by_mode,
 )
+from upm.catalog import Catalog
 from upm.cli import main
 from upm.errors import UsageError
 
@@ -41,6 +43,19 @@ def test_bad_rows_name_the_row(text, message):
     with pytest.raises(UsageError, match=message) as caught:
         parse_row(text)
     assert repr(text) in str(caught.value)
+
+
+def test_rows_all_is_every_clip_of_the_data_once(data_dir):
+    names = Catalog(data_dir).names()
+    rows = parse_rows(["all"], names)
+    assert [row.pieces for row in rows] == [(name,) for name in names]
+    assert len(rows) == len(set(rows)) >= 20  # every clip of the shared data, none twice
+    assert parse_rows(["02_01", "16_15+16_15"], names) == [
+        Row(("02_01",)), Row(("16_15", "16_15"), "upm")]
+    with pytest.raises(UsageError, match="stands alone"):
+        parse_rows(["all", "02_01"], names)
+    with pytest.raises(UsageError, match="repeated"):
+        parse_rows(["02_01", " 02_01"], names)
 
 
 def test_each_row_runs_on_its_exact_and_offset_references(data_dir, tmp_path, capsys):
@@ -124,6 +139,7 @@ def test_strength_is_a_setting_of_the_study(data_dir):
     (["--rows", "99_99"], "no clip '99_99'"),
     (["--rows", "02_01@5"], "one frame"),
     (["--rows", "02_01", "02_01"], "repeated"),
+    (["--rows", "all", "02_01"], "stands alone"),
     (["--offset-deg", "0"], "--offset-deg"),
     (["--seeds", "-1"], "--seeds"),
     (["--strength", "0"], "--strength 0"),

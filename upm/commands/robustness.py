@@ -7,7 +7,8 @@ free-root run is one path of a chaotic system; this says how often an outcome ho
 A row is CLIP, CLIP@A:B, or pieces joined by '+' with an optional ',METHOD' (default upm):
 02_01+02_02+02_01+02_02,feasible. The default rows are the flat-floor walks and runs of the
 data and the 8-12 s sequences of issue 10's table (11 rows; with the default 5 seeds, 66
-runs: about 9 minutes on 2 cores). Sequences joined by upm or feasible use --map, else
+runs: about 9 minutes on 2 cores); '--rows all' runs every clip of the data as a row of its
+own (what stands and what falls, and when). Sequences joined by upm or feasible use --map, else
 a UPM trained on the train split of clips.csv (cached outside the repository).
 
 Per run the figures of 'upm simulate --modes free' (fell and when, ends going down, joint
@@ -22,6 +23,7 @@ come: the same command, stopped or failed, completes only what is missing.
 Examples:
   upm robustness --out upm-robustness
   upm robustness --rows 05_01 16_15+16_15 --seeds 10 --out r
+  upm robustness --rows all --seeds 0 --out every-clip
   upm robustness --rows 02_01@0:240 --seeds 2 --workers 1 --out quick
 """
 
@@ -38,8 +40,9 @@ def configure(parser) -> None:
 
     add_data_argument(parser)
     parser.add_argument("--rows", nargs="+", metavar="ROW", default=None,
-                        help="clips or sequences (CLIP, CLIP@A:B, CLIP+CLIP+...[,METHOD]); "
-                             "default: issue 10's 11 rows")
+                        help="clips or sequences (CLIP, CLIP@A:B, CLIP+CLIP+...[,METHOD]), "
+                             "or 'all': every clip of the data once; default: issue 10's 11 "
+                             "rows")
     parser.add_argument("--seeds", type=int, metavar="K", default=OFFSET_SEEDS,
                         help="offset references per row, seeds 1 to K, besides the exact one "
                              f"(default {OFFSET_SEEDS}; 0: the exact references only)")
@@ -82,7 +85,7 @@ def run(args) -> int:
         CHECKPOINT_NAME,
         DEFAULT_ROWS,
         Settings,
-        parse_row,
+        parse_rows,
         plot,
         run_robustness,
         summary,
@@ -93,9 +96,6 @@ def run(args) -> int:
     from upm.errors import UsageError
     from upm.fileio import atomic_path
 
-    rows = [parse_row(text) for text in args.rows] if args.rows else list(DEFAULT_ROWS)
-    if len(set(rows)) != len(rows):
-        raise UsageError("--rows: a row is repeated")
     if not 0 <= args.seeds <= 1000:
         raise UsageError(f"--seeds must be from 0 to 1000, not {args.seeds}")
     if not (math.isfinite(args.offset_deg) and 0 < args.offset_deg <= 10):
@@ -120,6 +120,7 @@ def run(args) -> int:
 
         import_ray()
     catalog = Catalog(args.data)
+    rows = parse_rows(args.rows, catalog.names()) if args.rows else list(DEFAULT_ROWS)
     for piece in sorted({p for row in rows for p in row.pieces}):
         if catalog.load_ref(piece).n_frames < 2:  # a one-line error for a bad clip or range
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
