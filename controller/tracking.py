@@ -23,7 +23,8 @@ constraint rows active (``efc_type == mjCNSTR_LIMIT_JOINT``), the self-contacts,
 pelvis and head heights and the largest servo torque; and over the run the share of
 steps with a limit active, the fall and MuJoCo's warnings. The character has **fallen**
 when its pelvis or head is below :data:`FALL_FRACTION` of its standing height while the
-reference's is not (a reference that crouches or lies down is not a fall). A simulation
+reference's is not, and more than :data:`controller.falls.FALL_MARGIN` of it below the
+reference's (a reference that crouches or lies down is not a fall). A simulation
 whose state becomes non-finite, or on which MuJoCo warns of a bad qpos/qvel/qacc
 (it then resets the state itself), is stopped: ``diverged_frame`` says where, and
 later frames are NaN.

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.contacts import SELF_COLLISION_DEPTH_M
-from controller.falls import FALL_FRACTION
+from controller.falls import rule_text
 
 
 @dataclass(frozen=True)
@@ -161,10 +161,7 @@ class Tracking:
             "fell": self.fell,
             "fall_frame": self.fall_frame,
             "fall_time_s": None if self.fall_time_s is None else round(self.fall_time_s, 4),
-            "fall_rule": (f"pelvis or head below {FALL_FRACTION:g} x standing height "
-                          f"({FALL_FRACTION * self.standing_pelvis_m:.3f} m, "
-                          f"{FALL_FRACTION * self.standing_head_m:.3f} m) while the "
-                          "reference's is not"),
+            "fall_rule": rule_text(self.standing_pelvis_m, self.standing_head_m),
             "diverged_frame": self.diverged_frame,
             "warnings": dict(self.warnings),
             "warning_messages": list(self.messages),
