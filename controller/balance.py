@@ -34,7 +34,7 @@ motion. The controller has no randomness: the ``seed`` is recorded, and the same
 give the same run.
 
 The character has **fallen** when its pelvis or head is below half its standing height
-while the reference's is not, and a tenth of that height below the reference's
+while the reference's is not, and more than a tenth of that height below the reference's
 (:mod:`controller.falls`); the simulation then runs
 :data:`AFTER_FALL_S` more and stops (later frames are NaN).
 """
