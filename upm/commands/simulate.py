@@ -83,10 +83,11 @@ def configure(parser) -> None:
                         help="seed of --offset-deg's draws (default 1)")
     parser.add_argument("--processes", type=int, choices=[1, 2], default=_default_processes(),
                         help="processes for the balance controller's lookahead rollouts: "
-                             "2 runs them side by side (the same results, less wall time "
-                             "where 2 cores are free, but on runs whose rollouts stray, "
-                             "such as 16_15's, where 1 continues the chosen one; default: "
-                             "2 on a machine with 2 or more cores that can fork, else 1)")
+                             "2 runs them side by side (the same results; less wall time "
+                             "where 2 cores are free, though not always on runs whose "
+                             "rollouts stray, such as 16_15's, where 1 continues the "
+                             "chosen one; default: 2 on a machine with 2 or more cores "
+                             "that can fork, else 1)")
     parser.add_argument("--amc", metavar="S.amc|S.bvh", default=None,
                         help="write the free-root simulated motion as AMC or BVH, by the "
                              "extension (needs free in --modes)")
