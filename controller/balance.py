@@ -54,7 +54,7 @@ from controller.balance_control import (
     torque_model,
 )
 from controller.balance_run import BalanceRun, FrameLog
-from controller.balance_search import Search
+from controller.balance_search import Search, up_axis_z
 from controller.gain_selection import SELECT_GAINS, GainSelector
 
 #: Seconds simulated after a fall before the run stops.
@@ -149,8 +149,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     mujoco.mj_copyData(scratch, sim, data)
     control.step(scratch, 0, MODES[0])
     del scratch
+    root_q = int(sim.jnt_qposadr[free_joint(sim)])
     search = Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
-                    (pelvis_body, head_site), search_budget)
+                    (pelvis_body, head_site), search_budget,
+                    ref_up_z=up_axis_z(ref[:, root_q + 3:root_q + 7]))
     selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
                 if len(SELECT_GAINS) > 1 and PLACEMENT else None)
 

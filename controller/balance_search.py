@@ -19,13 +19,20 @@ from controller.balance_control import MODES
 #: The search: each segment of this many seconds runs in one mode ...
 SEGMENT_S = 0.25
 #: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
-#: far from vertical, or the head this far below the reference's: bent over at the waist
-#: with the pelvis still up) is run again in the next mode, then its predecessors, up to
+#: far from vertical and TROUBLE_TILT_MARGIN_DEG beyond the reference's tilt, or the head
+#: this far below the reference's: bent over at the waist with the pelvis still up) is run
+#: again in the next mode, then its predecessors, up to
 #: this many segments back (4 s: on 16_15 -> 16_15 the attempt that stands differs from
 #: the one that falls in a segment 3.5 s before the trouble; 10 s made the same runs) ...
 TROUBLE_DROP_M = 0.12
 TROUBLE_UP = 0.8
 TROUBLE_HEAD_DROP_M = 0.25
+#: A pelvis tilted past TROUBLE_UP is trouble only where it is tilted this much further
+#: than the reference's, degrees: 02_10 (wash self) bends over with its pelvis 43 deg from
+#: vertical, and the test, which did not look at the reference, sent the search after the
+#: clip's own posture. Where the reference tilts less than about 22 deg (every frame of
+#: issue 10's 315 references: at most 14.3 deg, 05_01) nothing changes.
+TROUBLE_TILT_MARGIN_DEG = 15.0
 MAX_BACKTRACK = 16
 #: ... and the segments after a changed one keep its mode for this long ...
 STICKY_S = 2.0
@@ -91,7 +98,8 @@ class Search:
 
     The run is cut into segments of :data:`SEGMENT_S`; each runs in one mode, the first
     by default. When the character gets into trouble (pelvis :data:`TROUBLE_DROP_M`
-    below the reference's, or its up axis tilted below :data:`TROUBLE_UP`, or the head
+    below the reference's, or its up axis tilted below :data:`TROUBLE_UP` and
+    :data:`TROUBLE_TILT_MARGIN_DEG` beyond the reference's, or the head
     :data:`TROUBLE_HEAD_DROP_M` below the reference's, or the simulation fails), the
     segment is run again from its saved start state in the next mode; the segments after
     a changed one keep its mode for :data:`STICKY_S`. The search first *sweeps* back: for
@@ -112,10 +120,13 @@ class Search:
     """
 
     def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_heights_m,
-                 watched: tuple[int, int], budget: float | None = None):
+                 watched: tuple[int, int], budget: float | None = None,
+                 ref_up_z=None):
         """``ref_heights_m``: the reference's pelvis and head heights, (T,) each;
         ``watched``: the pelvis body and the head site; ``budget``: in multiples of the
-        reference's physics steps (default :data:`SEARCH_BUDGET`; 0: no search)."""
+        reference's physics steps (default :data:`SEARCH_BUDGET`; 0: no search);
+        ``ref_up_z``: the vertical component of the reference's pelvis up axis, (T,)
+        (:func:`up_axis_z`; None: upright throughout)."""
         given = budget
         budget = SEARCH_BUDGET if given is None else float(given)
         if not (math.isfinite(budget) and budget >= 0):
@@ -124,6 +135,7 @@ class Search:
         self.every = segment_frames(fps)
         self.sticky = int(round(STICKY_S / SEGMENT_S))
         self.ref_pelvis, self.ref_head = ref_heights_m
+        self.up_limit = tilt_limits(np.ones(n_frames) if ref_up_z is None else ref_up_z)
         self.pelvis_body, self.head_site = watched
         self.budget_steps = budget * (n_frames - 1) * substeps
         self.choice: dict[int, int] = {}
@@ -182,7 +194,7 @@ class Search:
         ``"head low"``, ``"tilted"`` (empty: not in trouble)."""
         low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
         bent = self.ref_head[t] - data.site_xpos[self.head_site, 2] > TROUBLE_HEAD_DROP_M
-        tilted = data.xmat[self.pelvis_body, 8] < TROUBLE_UP
+        tilted = data.xmat[self.pelvis_body, 8] < self.up_limit[t]
         return tuple(name for name, on in (("pelvis low", low), ("head low", bent),
                                            ("tilted", tilted)) if on)
 
@@ -329,11 +341,47 @@ class _Trouble:
     sweeping: bool = True
 
 
+def up_axis_z(quat) -> np.ndarray:
+    """The vertical component of a body's up axis (its rotation matrix's last element).
+
+    Parameters
+    ----------
+    quat : array_like, shape (..., 4)
+        Orientations, (w, x, y, z), not necessarily of unit norm.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        1 upright, 0 lying, -1 upside down.
+    """
+    w, x, y, z = np.moveaxis(np.asarray(quat, dtype=float), -1, 0)
+    return (w * w - x * x - y * y + z * z) / (w * w + x * x + y * y + z * z)
+
+
+def tilt_limits(ref_up_z) -> np.ndarray:
+    """The least up-axis component (``xmat[8]``) of the pelvis out of trouble, per frame:
+    :data:`TROUBLE_UP`, or lower where the reference tilts to within
+    :data:`TROUBLE_TILT_MARGIN_DEG` of it (-1: no tilt is trouble).
+
+    Parameters
+    ----------
+    ref_up_z : array_like, shape (T,)
+        The reference's pelvis up-axis component (:func:`up_axis_z`).
+
+    Returns
+    -------
+    ndarray, shape (T,)
+    """
+    ref_tilt = np.arccos(np.clip(np.asarray(ref_up_z, dtype=float), -1.0, 1.0))
+    beyond = np.cos(np.minimum(np.pi, ref_tilt + math.radians(TROUBLE_TILT_MARGIN_DEG)))
+    return np.minimum(TROUBLE_UP, beyond)
+
+
 def trouble_rule() -> str:
     """The search's test for trouble (:meth:`Search.troubled`) in words."""
     tilt_deg = math.degrees(math.acos(TROUBLE_UP))
     return (f"in trouble: the pelvis more than {100 * TROUBLE_DROP_M:.0f} cm below the "
             f"reference's, or the head more than {100 * TROUBLE_HEAD_DROP_M:.0f} cm below "
             f"the reference's, or the pelvis's up axis more than {tilt_deg:.0f} deg from "
-            "vertical")
+            f"vertical and {TROUBLE_TILT_MARGIN_DEG:.0f} deg beyond the reference's tilt")
 

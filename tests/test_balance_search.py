@@ -8,6 +8,8 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from controller import balance_search, to_qpos
 from controller.balance import follow
@@ -125,6 +127,56 @@ def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
     mujoco.mj_kinematics(sim, data)
     s.ref_head[t] = data.site_xpos[s.head_site, 2]
     assert s.in_trouble(data, t)
+    # ... unless the reference bends over as far: 60 degrees is trouble only where the
+    # reference tilts less than 45 (02_10, washing, bends its pelvis 43 degrees over)
+    for ref_tilt_deg, trouble in ((0.0, True), (40.0, True), (50.0, False), (60.0, False)):
+        s.up_limit[t] = balance_search.tilt_limits([math.cos(math.radians(ref_tilt_deg))])[0]
+        assert s.in_trouble(data, t) == trouble, ref_tilt_deg
+
+
+def test_tilt_limit_follows_the_reference_only_where_it_bends_over():
+    margin = balance_search.TROUBLE_TILT_MARGIN_DEG
+    limit_deg = math.degrees(math.acos(balance_search.TROUBLE_UP))
+    ref_tilt_deg = np.linspace(0.0, 180.0, 721)
+    limits = balance_search.tilt_limits(np.cos(np.radians(ref_tilt_deg)))
+    # the fixed limit, exactly, wherever the reference is more than the margin inside it
+    inside = ref_tilt_deg < limit_deg - margin - 1e-9
+    assert np.all(limits[inside] == balance_search.TROUBLE_UP)
+    # beyond: the reference's tilt plus the margin; never past upside down
+    np.testing.assert_allclose(np.degrees(np.arccos(limits[~inside])),
+                               np.minimum(180.0, ref_tilt_deg[~inside] + margin), atol=1e-6)
+    assert np.all(np.diff(limits) <= 0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4).filter(
+    lambda q: sum(v * v for v in q) > 1e-3))
+def test_up_axis_z_is_mujocos_rotation_matrix_element(quat):
+    unit = np.asarray(quat) / np.linalg.norm(quat)
+    matrix = np.empty(9)
+    mujoco.mju_quat2Mat(matrix, unit)
+    assert balance_search.up_axis_z(quat) == pytest.approx(matrix[8], abs=1e-12)
+
+
+def test_the_searchs_reference_tilt_is_the_pelvis_body_tilt(model02, catalog):
+    """The search reads the reference's tilt off its root quaternion: the same as the
+    pelvis body's ``xmat[8]`` after forward kinematics, on a real clip that bends over."""
+    from controller.qpos import free_joint
+
+    motion = catalog.load("02_10")
+    qpos = to_qpos(model02, motion)[::40]
+    joint = free_joint(model02)
+    adr, body = model02.jnt_qposadr[joint], model02.jnt_bodyid[joint]
+    data = mujoco.MjData(model02)
+    expected = []
+    for q in qpos:
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model02, data)
+        expected.append(data.xmat[body, 8])
+    np.testing.assert_allclose(balance_search.up_axis_z(qpos[:, adr + 3:adr + 7]), expected,
+                               atol=1e-12)
+    # the clip bends the pelvis past the fixed limit: the limit follows it there
+    assert min(expected) < balance_search.TROUBLE_UP
 
 
 def test_search_gives_up_out_of_reach_or_budget(search):
