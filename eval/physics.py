@@ -66,7 +66,8 @@ _METRICS = (
     PhysicsMetric("ends_in_trouble", "share", "ends going down %",
                   "1 if the character did not fall but was in trouble at the run's last "
                   "frame (controller.balance_search.trouble_rule: pelvis or head well below the "
-                  "motion's, or the pelvis tilted): going down where the run ends"),
+                  "motion's, or the pelvis tilted well beyond the motion's): going down where the "
+                  "run ends"),
     PhysicsMetric("fell_or_going_down", "share", "falls or going down %",
                   "1 if the character fell or ended going down: the run did not end with "
                   "the character up and out of trouble"),

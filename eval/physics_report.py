@@ -70,7 +70,7 @@ def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int) -> s
         f"after it. Falls: share of runs in which the character fell (anywhere in the run); "
         f"going down: share of runs in which it did not fall but ended in trouble (the "
         f"balance search's test: pelvis or head well below the motion's, or the pelvis "
-        f"tilted); "
+        f"tilted well beyond the motion's); "
         f"errors over the window's frames before any fall, against the method's own motion "
         f"(n: runs with such frames). Mean [95 % bootstrap interval].",
     ]

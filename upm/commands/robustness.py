@@ -8,7 +8,7 @@ A row is CLIP, CLIP@A:B, or pieces joined by '+' with an optional ',METHOD' (def
 02_01+02_02+02_01+02_02,feasible. The default rows are the flat-floor walks and runs of the
 data and the 8-12 s sequences of issue 10's table (11 rows; with the default 5 seeds, 66
 runs: about 9 minutes on 2 cores); '--rows all' runs every clip of the data as a row of
-its own (what stands and what falls, and when; with --seeds 0 about 20 minutes). Sequences
+its own (what stands and what falls, and when; with --seeds 0 13-20 minutes). Sequences
 joined by upm or feasible use --map, else a UPM trained on the train split of clips.csv
 (cached outside the repository).
 
