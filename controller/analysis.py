@@ -22,11 +22,11 @@ def settings(tracking_modes=(), controller: str = "balance",
     """The thresholds and methods of the checks, JSON-ready (units in the names).
     ``strength``: the multiple of the strength tables' torque limits the model was loaded
     with (:func:`humanoid_xml.models.load_model`)."""
-    from controller.contacts import SELF_COLLISION_DEPTH_M
-    from controller.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
-    from controller.tracking import FALL_FRACTION, MAX_STEP_S
-    from controller.validity import FLOOR_TOLERANCE_M
-    from upm.limits import LIMIT_TOLERANCE_DEG
+    from controller.checks.contacts import SELF_COLLISION_DEPTH_M
+    from controller.checks.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
+    from controller.checks.validity import FLOOR_TOLERANCE_M
+    from controller.tracking.servo import FALL_FRACTION, MAX_STEP_S
+    from upm.motion.limits import LIMIT_TOLERANCE_DEG
 
     out = {
         "limit_tolerance_deg": LIMIT_TOLERANCE_DEG,
@@ -57,7 +57,7 @@ def settings(tracking_modes=(), controller: str = "balance",
                 "actuators, swing-foot placement with its gain chosen by 1 s rollouts "
                 "every 0.5 s (0.25 s where they stray), a backtracking search over "
                 "controller modes where the character gets into trouble; "
-                "controller.balance"
+                "controller.balance.follow"
                 if controller == "balance" else "position servos alone (open loop)"),
             "body_error": "mean distance of the joint centres from the reference's, each "
                           "relative to its pelvis and heading (drift reported apart)",
@@ -90,7 +90,7 @@ def motion_description(model, motion, model_path=None) -> dict:
 
 
 def _budget(search_budget):
-    from controller.balance_search import SEARCH_BUDGET
+    from controller.balance.search import SEARCH_BUDGET
 
     return SEARCH_BUDGET if search_budget is None else float(search_budget)
 
@@ -98,11 +98,11 @@ def _budget(search_budget):
 def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False,
              search_budget: float | None = None, processes: int = 1):
     """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller``: a
-    :class:`controller.balance_report.BalanceTracking` or a
+    :class:`controller.balance.report.BalanceTracking` or a
     :class:`controller.tracking.Tracking`. ``processes``: the balance controller's (1 or
     2, see :func:`controller.balance.follow`)."""
-    from controller.balance_report import balance_tracking
-    from controller.tracking import track_qpos
+    from controller.balance.report import balance_tracking
+    from controller.tracking.servo import track_qpos
 
     if controller not in CONTROLLERS:
         raise ValueError(f"unknown controller {controller!r} (controllers: "
@@ -127,7 +127,7 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
         "fall_in_window", "error_deg_rms" (window frames, before any fall), ...}}``.
     """
     from controller.qpos import to_qpos
-    from upm.progress import progress as progress_bar
+    from upm.core.progress import progress as progress_bar
 
     qpos = to_qpos(model, motion)
     n = motion.n_frames
@@ -200,11 +200,11 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
         ``validity``, ``residual`` (or None) and ``tracking`` (mode -> Tracking), for
         callers that want the arrays.
     """
-    from controller.dynamics import root_residual
+    from controller.checks.dynamics import root_residual
+    from controller.checks.validity import check_motion
     from controller.qpos import to_qpos
     from controller.report import build_report
-    from controller.tracking import track
-    from controller.validity import check_motion
+    from controller.tracking.servo import track
 
     windows = tuple(windows)
     validity = check_motion(model, motion, windows)

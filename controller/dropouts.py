@@ -1,4 +1,4 @@
-"""Filling marker dropouts in a reference (:mod:`upm.dropouts`: bones whose angles read
+"""Filling marker dropouts in a reference (:mod:`upm.motion.dropouts`: bones whose angles read
 exactly zero for a few frames between frames far from zero).
 
 A low-pass filter turns such a jump into a swing of the arm in 40 ms that throws the whole
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.dropouts import DROPOUT_JUMP_DEG, dropout_runs, fill_runs
+from upm.motion.dropouts import DROPOUT_JUMP_DEG, dropout_runs, fill_runs
 
 
 def fill_dropouts(model, qpos) -> tuple[np.ndarray, int]:

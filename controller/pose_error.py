@@ -1,6 +1,6 @@
 """How far a simulated trajectory is from its reference, per frame: joint angles, body
 pose (relative to the pelvis and its heading), the pelvis's horizontal drift and heading,
-and the centre of mass's height (definitions in :mod:`controller.balance_run`)."""
+and the centre of mass's height (definitions in :mod:`controller.balance.run`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def reference_errors(model, qpos, reference_qpos):
     Returns
     -------
     joint_error_deg, body_error_mm, root_drift_m, heading_error_deg, com_height_error_m :
-        ndarray, shape (T,) each, as defined in :mod:`controller.balance_run`
+        ndarray, shape (T,) each, as defined in :mod:`controller.balance.run`
         (``heading_error_deg`` signed, in [-180, 180)).
     """
     import mujoco

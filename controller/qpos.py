@@ -23,10 +23,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from humanoid_xml.frames import ASF_TO_MJ, rotations_to_asf, rotations_to_mj
-from upm.angles import wrap_deg
-from upm.motion import Motion
-from upm.rotations import euler_to_matrix
-from upm.skeleton import POSTURE_DOF_NAMES, POSTURE_SIZE, Skeleton
+from upm.motion.motion import Motion
+from upm.motion.skeleton import POSTURE_DOF_NAMES, POSTURE_SIZE, Skeleton
+from upm.ops.angles import wrap_deg
+from upm.ops.rotations import euler_to_matrix
 
 
 @dataclass(frozen=True)

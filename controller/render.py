@@ -214,7 +214,7 @@ def filmstrip(model, rows, frames, path, *, fps: float | None = None, windows=()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from upm.fileio import atomic_open
+    from upm.core.fileio import atomic_open
 
     frames = [int(f) for f in frames]
     if not frames or not rows:
@@ -279,7 +279,7 @@ def write_video(model, qpos, fps: float, path, *, windows=(), video_fps: float =
     UsageError
         For an unknown suffix.
     """
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -312,7 +312,7 @@ def write_video(model, qpos, fps: float, path, *, windows=(), video_fps: float =
 def _write_gif(images, rate: float, path: Path) -> None:
     from PIL import Image
 
-    from upm.fileio import atomic_open
+    from upm.core.fileio import atomic_open
 
     pictures = [Image.fromarray(image) for image in images]
     with atomic_open(path, "wb") as handle:
@@ -323,7 +323,7 @@ def _write_gif(images, rate: float, path: Path) -> None:
 def _write_mp4(images, rate: float, path: Path) -> None:
     import imageio_ffmpeg
 
-    from upm.fileio import atomic_path
+    from upm.core.fileio import atomic_path
 
     height, width = images.shape[1:3]
     with atomic_path(path) as tmp:
@@ -361,7 +361,7 @@ def play_in_viewer(model, qpos, fps: float, *, loops: int = 1) -> None:
     """
     import time
 
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if not has_display():
         raise UsageError("--viewer needs a display (DISPLAY is not set); use --video "

@@ -19,7 +19,7 @@ The JSON document (``schema`` = :data:`SCHEMA`, ``schema_version`` =
     }
 
 Version 2: the free-root tracking is by default the balance controller
-(``controller.balance``; ``settings.tracking.free_controller``), and its part figures
+(``controller.balance.follow``; ``settings.tracking.free_controller``), and its part figures
 (totals, windows, pieces, and each window's own ``free_window`` run) add to ``fell``,
 ``fall_time_s`` and ``error_deg_rms``: ``body_error_mm_mean``/``_peak``, ``root_drift_m``,
 ``heading_error_deg_peak`` (added within version 2; readers of older version-2 reports
@@ -32,9 +32,9 @@ down without having fallen yet; per frame ``free_trouble``), ``wall_s_per_sim_s`
 run's figures (``totals.tracking.free``) also list ``search_troubles`` (added within
 version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "retries",
 "rerun_s", "outcome", "restarts_by_mode", "rerun_s_by_mode", "last_mode"}``
-(:class:`controller.balance_search.SearchTrouble`; the last three added within version 2:
+(:class:`controller.balance.search.SearchTrouble`; the last three added within version 2:
 the retries and the seconds run again by the mode of the segment each restart changed,
-one entry per mode of ``controller.balance_control.MODES``, and the mode of the last
+one entry per mode of ``controller.balance.control.MODES``, and the mode of the last
 restart, the change that got past the trouble when it did); and every part's,
 ``torque_by_actuator`` (added within version 2; JSON only): per actuator ``{"peak_nm",
 "mean_nm", "range_nm", "saturation_share", "saturated_concentric_share"}``: the torque's
@@ -48,7 +48,7 @@ added within version 2, missing from older reports).
 Every part's figures of a free-root balance run also take its errors apart by where the
 search worked (added within version 2, missing from older reports): ``search_mode_share``
 (the share of the part's frames before any fall run in a mode the search changed, not the
-default: ``controller.balance_search.frame_modes``), and ``error_deg_rms`` and
+default: ``controller.balance.search.frame_modes``), and ``error_deg_rms`` and
 ``body_error_mm_mean`` over the frames run in the default mode (``..._default_mode``) and
 over those the search changed (``..._search_modes``; ``null`` where there are none).
 
@@ -79,7 +79,7 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.validity import Validity, frame_records, summarize
+from controller.checks.validity import Validity, frame_records, summarize
 
 SCHEMA = "upm-controller/validity"
 #: Bumped whenever a field changes meaning or is removed.
@@ -99,7 +99,7 @@ def build_report(kind: str, validity: Validity, *, motion: dict | None = None,
         The kinematic checks (its ``windows`` are the report's windows).
     motion, settings : dict, optional
         Descriptions copied into the report.
-    residual : controller.dynamics.RootResidual, optional
+    residual : controller.checks.dynamics.RootResidual, optional
     tracking : dict of str to controller.tracking.Tracking, optional
         Whole-motion simulations by mode (``"free"``, ``"driven"``).
     window_meta : list of dict, optional
@@ -245,7 +245,7 @@ def write_report(report: dict, json_path: str | os.PathLike,
     (Path, Path)
         The JSON and CSV paths written.
     """
-    from upm.fileio import atomic_write_text
+    from upm.core.fileio import atomic_write_text
 
     json_path = Path(json_path)
     csv_path = Path(csv_path) if csv_path is not None else json_path.with_suffix(".csv")

@@ -179,7 +179,7 @@ def import_ray():
     try:
         import ray
     except ImportError:
-        from upm.errors import UsageError
+        from upm.core.errors import UsageError
 
         raise UsageError("--executor ray needs Ray: pip install -e '.[ray]' (or "
                          "pip install 'ray>=2.9')") from None
@@ -189,7 +189,7 @@ def import_ray():
 def make_executor(name: str, workers: int, address: str | None = None,
                   initializer: Callable | None = None, initargs: tuple = ()):
     """The executor called ``name`` (:data:`EXECUTORS`)."""
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if name == "local":
         if address:

@@ -1,7 +1,7 @@
 """Figures of the study (matplotlib, Agg backend, PNG written atomically).
 
 - the paper's Fig. 13 and 14 (one DOF across the window, UPM vs linear) are drawn by
-  :mod:`upm.dof_plot`, which the studio and ``upm transition --plot`` share;
+  :mod:`upm.transitions.dof_plot`, which the studio and ``upm transition --plot`` share;
 - :func:`plot_metric_chart`: every headline metric across the methods, with the 95 %
   intervals and the real windows' value (the calibration) as a band.
 - :func:`write_filmstrip`: the simulated humanoid through the same transition by several
@@ -49,7 +49,7 @@ def plot_metric_chart(path: str | os.PathLike, statistics: Summaries, methods, w
 
     from eval.metrics import HEADLINE, METRICS
     from eval.tables import DISPLAY
-    from upm.fileio import atomic_open
+    from upm.core.fileio import atomic_open
 
     metrics = list(metrics or HEADLINE)
     columns = 4

@@ -1,8 +1,8 @@
 """The study's metrics: what each one measures, its unit and which way is better (the
 registry :data:`METRICS`), and the pure batched functions behind the motion metrics.
 
-Kinematic validity and the root residual come from :mod:`controller.validity` and
-:mod:`controller.dynamics`; this module adds the rest: joint jerk, foot skating and the
+Kinematic validity and the root residual come from :mod:`controller.checks.validity` and
+:mod:`controller.checks.dynamics`; this module adds the rest: joint jerk, foot skating and the
 distance to the nearest real posture. Every function works on arrays (shapes in the
 docstrings) and knows nothing of MuJoCo.
 """
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from upm.angles import angle_diff_deg, wrap_deg
-from upm.angular_search import diff_of_wrapped
+from upm.maps.angular_search import diff_of_wrapped
+from upm.ops.angles import angle_diff_deg, wrap_deg
 
 #: A foot is planted while its lowest point is below this height, metres.
 FOOT_CONTACT_HEIGHT_M = 0.05
@@ -52,7 +52,7 @@ _METRICS = (
     Metric("valid_pct", "valid", "% of window frames", "higher",
            "window frames with no joint-limit excess beyond what the two end postures "
            "already have, no self-collision deeper than 1 mm and no geom more than 1 cm "
-           "below the floor (controller.validity: valid_beyond_ends)"),
+           "below the floor (controller.checks.validity: valid_beyond_ends)"),
     Metric("raw_valid_pct", "valid (raw)", "% of window frames", "higher",
            "as valid_pct, but any excess beyond the ASF limits counts, even one the end "
            "postures already have (real CMU frames often do)"),
@@ -100,7 +100,7 @@ _METRICS = (
            "the humanoid's servos (human-strength torque limits) following the motion with "
            "the root driven along it, from 30 frames before the window: joint error to the "
            "reference over the window frames, RMS over the 45 hinges -- what the body cannot "
-           "do, or what its contacts and limits stop (controller.tracking, mode driven)"),
+           "do, or what its contacts and limits stop (controller.tracking.servo, mode driven)"),
 )
 
 #: Every metric, by name, in table order.

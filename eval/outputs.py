@@ -34,7 +34,7 @@ from eval.realdata import FLAT_FLOOR_MAX_BW
 from eval.records import COLUMNS, csv_text
 from eval.scoring import RESIDUAL_CONTEXT
 from eval.study import StudyResult, make_transition, pair_by_id
-from upm.fileio import atomic_open, atomic_write_text
+from upm.core.fileio import atomic_open, atomic_write_text
 
 if TYPE_CHECKING:
     from eval.summaries import Summaries
@@ -169,8 +169,8 @@ def choose_example(result: StudyResult, frames: int) -> Example:
     median: a typical pair, not the most dramatic), the DOF the one where they differ
     most in it.
     """
-    from upm.angles import angle_diff_deg
-    from upm.skeleton import POSTURE_DOF_NAMES
+    from upm.motion.skeleton import POSTURE_DOF_NAMES
+    from upm.ops.angles import angle_diff_deg
 
     data = result.data
     dofs = np.flatnonzero(data.real.dofs)
@@ -195,7 +195,7 @@ def choose_example(result: StudyResult, frames: int) -> Example:
 def write_figures(result: StudyResult, statistics: Summaries, out: Path) -> dict:
     """The figures; returns ``{name: path}`` and the example's description."""
     from eval.figures import plot_metric_chart, write_filmstrip
-    from upm.dof_plot import plot_sequence_dof, plot_window_dof
+    from upm.transitions.dof_plot import plot_sequence_dof, plot_window_dof
 
     config = result.config
     frames = figure_window(config.windows)

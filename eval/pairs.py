@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 
 #: Frame rate of the study: every clip is resampled to it first.
 STUDY_FPS = 120.0

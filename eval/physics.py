@@ -21,15 +21,13 @@ no randomness), whatever the executor and the number of workers.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from eval.records import REAL, Records
-from upm.errors import UpmError
+from eval.runs import Checkpoint, StudyIncomplete, run_checkpointed
 
 if TYPE_CHECKING:
     from eval.summaries import Summaries
@@ -65,7 +63,7 @@ _METRICS = (
                   "1 if the character fell during the run (before, in or after the window)"),
     PhysicsMetric("ends_in_trouble", "share", "ends going down %",
                   "1 if the character did not fall but was in trouble at the run's last "
-                  "frame (controller.balance_search.trouble_rule: pelvis or head well below the "
+                  "frame (controller.balance.search.trouble_rule: pelvis or head well below the "
                   "motion's, or the pelvis tilted well beyond the motion's): going down where the "
                   "run ends"),
     PhysicsMetric("fell_or_going_down", "share", "falls or going down %",
@@ -78,7 +76,7 @@ _METRICS = (
                   "RMS over the window's frames before any fall of the hinges' error"),
     PhysicsMetric("body_error_mm_mean", "mm", "body error mm",
                   "mean joint-centre position error relative to the pelvis, heading "
-                  "removed (controller.balance)"),
+                  "removed (controller.balance.follow)"),
     PhysicsMetric("body_error_mm_peak", "mm", "body error peak mm",
                   "peak of the same over the window"),
     PhysicsMetric("root_drift_m", "m", "root drift m",
@@ -168,8 +166,8 @@ def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
 def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
     """Run the balance controller over ``motion`` and the figures of its window."""
     from controller import to_qpos
-    from controller.balance import follow
-    from controller.balance_run import window_summary
+    from controller.balance.follow import follow
+    from controller.balance.run import window_summary
 
     run = follow(model, to_qpos(model, motion), motion.fps)
     summary = window_summary(run, start, stop)
@@ -194,7 +192,8 @@ _WORKER: dict = {}
 
 def init_worker(config, pairs: dict, real_windows: dict) -> None:
     """Load the study's data once per worker process (idempotent)."""
-    from eval.study import prepare, single_threaded_blas
+    from eval.runs import single_threaded_blas
+    from eval.study import prepare
 
     if _WORKER.get("config") != config:
         single_threaded_blas()
@@ -207,109 +206,6 @@ def run_unit(unit: Unit) -> dict[str, float]:
     model, motion, start, stop = unit_motion(_WORKER["data"], unit, _WORKER["pairs"],
                                              _WORKER["real_windows"])
     return simulate_unit(model, motion, start, stop)
-
-
-# --- the checkpoint -------------------------------------------------------------------------
-
-
-class Checkpoint:
-    """Finished units, one JSON line each, in ``DIR/physics-partial.jsonl`` (or ``name``).
-
-    The first line states the settings the figures depend on; a file with other settings
-    is not reused (it is replaced when the run starts). With ``numbers`` (the default) a
-    unit's figures are read back as floats (NaN for null); else as they were written
-    (``eval.robustness``: booleans and nulls kept).
-    """
-
-    def __init__(self, out_dir, settings: dict, *, name: str = CHECKPOINT_NAME,
-                 format_name: str = CHECKPOINT_FORMAT, version: int = CHECKPOINT_VERSION,
-                 numbers: bool = True):
-        self.path = Path(out_dir) / name
-        self.settings = {"format": format_name, "version": version, **settings}
-        self.numbers = numbers
-        self.done: dict[str, dict[str, float]] = {}
-        self._handle = None
-
-    def load(self) -> int:
-        """Read the finished units of an earlier run with the same settings (count)."""
-        if not self.path.is_file():
-            return 0
-        lines = self.path.read_text(encoding="utf-8").splitlines()
-        try:
-            if not lines or json.loads(lines[0]) != self.settings:
-                return 0
-            for line in lines[1:]:
-                entry = json.loads(line)
-                metrics = entry["metrics"]
-                if not isinstance(metrics, dict):
-                    raise TypeError("metrics")
-                self.done[entry["key"]] = (
-                    {k: (math.nan if v is None else float(v)) for k, v in metrics.items()}
-                    if self.numbers else metrics)
-        except (ValueError, KeyError, TypeError, AttributeError):
-            # A line cut short by a crash: keep what was read before it.
-            pass
-        return len(self.done)
-
-    def open(self) -> None:
-        """Start appending (rewriting the file with what was loaded)."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = self.path.with_name(self.path.name + ".tmp")
-        with open(tmp, "w", encoding="utf-8") as handle:
-            handle.write(json.dumps(self.settings) + "\n")
-            for key, metrics in self.done.items():
-                handle.write(_line(key, metrics))
-        os.replace(tmp, self.path)
-        self._handle = open(self.path, "a", encoding="utf-8")
-
-    def add(self, key: str, metrics: dict[str, float]) -> None:
-        self.done[key] = metrics
-        self._handle.write(_line(key, metrics))
-        self._handle.flush()
-
-    def close(self) -> None:
-        if self._handle is not None:
-            self._handle.close()
-            self._handle = None
-
-    def remove(self) -> None:
-        self.close()
-        self.path.unlink(missing_ok=True)
-
-
-def run_checkpointed(runner, fn, tasks: list, checkpoint: Checkpoint, desc: str,
-                     show_progress: bool = True) -> list[tuple[str, str]]:
-    """Run ``tasks`` (``(key, args)`` each) on an :mod:`eval.executor` executor, adding
-    each finished one to the checkpoint as it comes, with a progress bar.
-
-    Returns
-    -------
-    list of (str, str)
-        The key and error of every task that failed (the others are in the checkpoint).
-    """
-    from upm.progress import progress
-
-    failures = []
-    checkpoint.open()
-    bar = progress(total=len(tasks), desc=desc, unit="run",
-                   disable=None if show_progress else True)
-    try:
-        for outcome in runner.run(fn, tasks):
-            if outcome.ok:
-                checkpoint.add(outcome.key, outcome.value)
-            else:
-                failures.append((outcome.key, outcome.error))
-            bar.update()
-    finally:
-        bar.close()
-        checkpoint.close()
-    return failures
-
-
-def _line(key: str, metrics: dict[str, float]) -> str:
-    clean = {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-             for k, v in metrics.items()}
-    return json.dumps({"key": key, "metrics": clean}) + "\n"
 
 
 def records_of(units: list[Unit], done: dict[str, dict[str, float]]) -> Records:
@@ -354,10 +250,6 @@ def physics_statistics(records: Records, pair_records: list[dict], real_windows:
 
 
 # --- the run --------------------------------------------------------------------------------
-
-
-class StudyIncomplete(UpmError):
-    """Some units failed; the finished ones are kept in the checkpoint."""
 
 
 @dataclass
@@ -423,7 +315,8 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
 
     from eval.executor import make_executor
     from eval.pairs import draw_real_windows
-    from eval.study import default_workers, pair_by_id
+    from eval.runs import default_workers
+    from eval.study import pair_by_id
 
     config = result.config
     data = result.data
@@ -434,7 +327,9 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                     for frames in config.windows}
     units = task_list(list(pairs.values()), real_windows, config.methods, config.windows)
     checkpoint = Checkpoint(out_dir, {"data": Path(config.data_dir).name, "seed": config.seed,
-                                      "context_s": CONTEXT_S, "alpha": config.as_dict()["alpha"]})
+                                      "context_s": CONTEXT_S, "alpha": config.as_dict()["alpha"]},
+                            name=CHECKPOINT_NAME, format_name=CHECKPOINT_FORMAT,
+                            version=CHECKPOINT_VERSION)
     resumed = checkpoint.load()
     todo = [u for u in units if u.key not in checkpoint.done]
     workers = max(1, min(workers or default_workers(), max(1, len(todo))))

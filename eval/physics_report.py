@@ -65,7 +65,7 @@ def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int) -> s
         "## Can the character perform it? The free-root test",
         "",
         f"The first {n_pairs} pairs (and as many real windows): the balance controller "
-        f"(controller.balance: root free, no external force, each joint's strength) follows "
+        f"(controller.balance.follow: root free, no external force, each joint's strength) follows "
         f"each method's motion from {CONTEXT_S:g} s before the window to {CONTEXT_S:g} s "
         f"after it. Falls: share of runs in which the character fell (anywhere in the run); "
         f"going down: share of runs in which it did not fall but ended in trouble (the "

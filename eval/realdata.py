@@ -20,8 +20,8 @@ import numpy as np
 
 from eval.metrics import nearest_rms_deg
 from eval.pairs import STUDY_FPS, Segment
-from upm.angles import wrap_deg
-from upm.errors import UsageError
+from upm.core.errors import UsageError
+from upm.ops.angles import wrap_deg
 
 #: A clip is flat-floor when the median residual force of its own frames is below this
 #: (body weights). Measured: flat walks and runs 0.01-0.06, the dance 05_11 0.09; the
@@ -37,7 +37,7 @@ def load_test_clips(catalog, split: str = "test") -> dict:
     dict of str to upm.Motion
         By clip name, in catalogue order.
     """
-    from upm.resample import resample
+    from upm.motion.resample import resample
 
     names = catalog.names(split)
     if len(names) < 2:
@@ -121,14 +121,14 @@ def floor_residuals(catalog, motions) -> dict[str, float]:
 
     Parameters
     ----------
-    catalog : upm.catalog.Catalog
+    catalog : upm.motion.catalog.Catalog
     motions : dict of str to upm.Motion
 
     Returns
     -------
     dict of str to float
     """
-    from controller.dynamics import root_residual
+    from controller.checks.dynamics import root_residual
     from controller.qpos import to_qpos
     from humanoid_xml import catalog_model_path, load_model
 

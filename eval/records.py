@@ -145,12 +145,12 @@ class Records:
 
         Raises
         ------
-        upm.errors.DataFileError
+        upm.core.errors.DataFileError
             Naming ``path`` and the line at fault: a wrong header, a row of the wrong
             length, an unknown kind or metric, an id or window that is not an integer, a
             value that is not a number, a row repeated.
         """
-        from upm.errors import DataFileError
+        from upm.core.errors import DataFileError
 
         records = cls(metrics)
         reader = csv.reader(io.StringIO(text))

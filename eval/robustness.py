@@ -4,10 +4,10 @@ A free-root run is one path of a chaotic system: whether the character falls can
 differences far under mocap's precision, so one run per clip says little. Here every
 *row* (a clip, or clips joined by a transition method) is run on its exact reference
 (offset seed 0) and on references whose joint channels are each moved by their own
-constant drawn from N(0, ``offset_deg``) (:func:`upm.perturb.offset_joint_angles`, seeds
+constant drawn from N(0, ``offset_deg``) (:func:`upm.motion.perturb.offset_joint_angles`, seeds
 1 to K), each by the balance controller (:func:`controller.balance.follow`: root free, no
 external force) from start to end. The figures per run are those of ``upm simulate
---modes free`` (:class:`controller.balance_report.BalanceTracking`); per row, how many runs
+--modes free`` (:class:`controller.balance.report.BalanceTracking`); per row, how many runs
 fall and when, the others' errors, and the search's retries (the controller's work, the
 same on any machine). The wall time per simulated second is recorded per run, but the
 runs share the machine (``workers`` at once, each on one process): ``upm simulate`` and
@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 
 CHECKPOINT_NAME = "robustness-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/robustness-checkpoint"
@@ -81,10 +81,10 @@ def parse_row(text: str) -> Row:
 
     Raises
     ------
-    upm.errors.UsageError
+    upm.core.errors.UsageError
         Naming the row, for an empty piece, an unknown method, or a malformed clip.
     """
-    from upm.catalog import parse_clip_ref
+    from upm.motion.catalog import parse_clip_ref
     from upm.transitions import get_method
 
     body, _, method = text.strip().partition(",")
@@ -107,7 +107,7 @@ def parse_rows(texts, clip_names) -> list[Row]:
 
     Raises
     ------
-    upm.errors.UsageError
+    upm.core.errors.UsageError
         For a malformed row, ``all`` beside other rows, or a row given twice.
     """
     texts = [t.strip() for t in texts]
@@ -179,7 +179,7 @@ def task_list(rows, seeds: int) -> list[Unit]:
     return [Unit(row, seed) for row in rows for seed in range(seeds + 1)]
 
 
-#: Figures of one run (of :meth:`controller.balance_report.BalanceTracking.run_summary`).
+#: Figures of one run (of :meth:`controller.balance.report.BalanceTracking.run_summary`).
 RUN_FIELDS = ("fell", "fall_time_s", "ends_in_trouble", "error_deg_rms",
               "body_error_mm_mean", "root_drift_m", "heading_error_deg_peak",
               "search_retries", "wall_s_per_sim_s", "raw_steps_per_step",
@@ -193,8 +193,8 @@ def reference(settings: Settings, row: Row, seed: int):
     """The row's motion (offset by ``seed`` unless it is 0) and the humanoid of its first
     piece's subject: ``(model, motion)``. Sequences are cached per worker."""
     from humanoid_xml.models import catalog_model_path, load_model
-    from upm.catalog import Catalog, parse_clip_ref
-    from upm.perturb import offset_joint_angles
+    from upm.motion.catalog import Catalog, parse_clip_ref
+    from upm.motion.perturb import offset_joint_angles
     from upm.transitions import build_sequence
     from upm.transitions.cuts import matched_pieces
     from upm.transitions.registry import KeySourceContext, build_key_source, get_method
@@ -228,15 +228,35 @@ def reference(settings: Settings, row: Row, seed: int):
     return model, motion
 
 
+def search_by_mode(troubles) -> dict:
+    """Where the search's work went, by the mode of the segment each restart changed
+    (:data:`controller.balance.control.MODES`): ``{"restarts", "rerun_s", "got_past"}``,
+    one entry per mode each; ``got_past`` counts the troubles whose last restart (the
+    change that got past) was in that mode. ``troubles``: a report's
+    ``search_troubles``."""
+    from controller.balance.control import MODES
+
+    out = {"restarts": [0] * len(MODES), "rerun_s": [0.0] * len(MODES),
+           "got_past": [0] * len(MODES)}
+    for trouble in troubles:
+        for m in range(len(MODES)):
+            out["restarts"][m] += trouble["restarts_by_mode"][m]
+            out["rerun_s"][m] += trouble["rerun_s_by_mode"][m]
+        if trouble["outcome"] == "got past" and trouble["last_mode"] is not None:
+            out["got_past"][trouble["last_mode"]] += 1
+    out["rerun_s"] = [round(x, 4) for x in out["rerun_s"]]
+    return out
+
+
 def run_unit(settings: Settings, unit: Unit) -> dict:
     """One run (in a worker): the figures of :data:`RUN_FIELDS`, plus ``seconds`` (the
     motion's length), ``wall_s``, ``search_gave_up``: the troubles the search gave up
     on (``{"time_s", "outcome"}`` each, the outcome ``"budget spent"`` or ``"no mode
-    within reach"``; :class:`controller.balance_search.SearchTrouble`), and
+    within reach"``; :class:`controller.balance.search.SearchTrouble`), and
     ``search_by_mode``: :func:`search_by_mode` of its troubles."""
     from controller.analysis import free_run
     from controller.qpos import to_qpos
-    from eval.study import single_threaded_blas
+    from eval.runs import single_threaded_blas
 
     single_threaded_blas()
     model, motion = reference(settings, unit.row, unit.seed)
@@ -301,8 +321,7 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
     import time
 
     from eval.executor import make_executor
-    from eval.physics import Checkpoint, StudyIncomplete, run_checkpointed
-    from eval.study import default_workers
+    from eval.runs import Checkpoint, StudyIncomplete, default_workers, run_checkpointed
 
     units = task_list(rows, seeds)
     checkpoint = Checkpoint(out_dir, settings.as_dict(), name=CHECKPOINT_NAME,
@@ -325,200 +344,3 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
                             runs={u.key: checkpoint.done[u.key] for u in units},
                             resumed=resumed, workers=workers, executor=executor,
                             wall_s=time.perf_counter() - start)
-
-
-def row_summary(result: RobustnessResult, row: Row) -> dict:
-    """One row's figures: seed 0's run, the offset runs' falls and when, the standing
-    runs' error ranges and the cost."""
-    exact = result.run(row, 0)
-    offsets = [result.run(row, s) for s in range(1, result.seeds + 1)]
-    runs = [exact, *offsets]
-    up = [r for r in runs if not r["fell"]]
-
-    def span(values):
-        values = [v for v in values if v is not None]
-        return [min(values), max(values)] if values else None
-
-    return {
-        "row": row.text, "label": row.label, "seconds": exact["seconds"],
-        "exact": exact,
-        "offset_falls": sum(bool(r["fell"]) for r in offsets),
-        "offset_runs": len(offsets),
-        "offset_fall_times_s": sorted(r["fall_time_s"] for r in offsets if r["fell"]),
-        "falls": sum(bool(r["fell"]) for r in runs), "runs": len(runs),
-        "falls_budget_spent": sum(bool(r["fell"]) and _budget_spent(r) for r in runs),
-        "ends_going_down": sum(bool(r["ends_in_trouble"]) for r in up),
-        "standing_error_deg_rms": span(r["error_deg_rms"] for r in up),
-        "standing_body_error_mm_mean": span(r["body_error_mm_mean"] for r in up),
-        # the same over the frames run in the default mode and over those the search
-        # changed (missing from runs checkpointed before these figures)
-        "standing_body_error_mm_mean_default_mode": span(
-            r.get("body_error_mm_mean_default_mode") for r in up),
-        "standing_body_error_mm_mean_search_modes": span(
-            r.get("body_error_mm_mean_search_modes") for r in up),
-        "search_retries": span(r["search_retries"] for r in runs),
-        "wall_s_per_sim_s": span(r["wall_s_per_sim_s"] for r in runs),
-        "raw_steps_per_step": span(r["raw_steps_per_step"] for r in runs),
-    }
-
-
-def search_by_mode(troubles) -> dict:
-    """Where the search's work went, by the mode of the segment each restart changed
-    (:data:`controller.balance_control.MODES`): ``{"restarts", "rerun_s", "got_past"}``,
-    one entry per mode each; ``got_past`` counts the troubles whose last restart (the
-    change that got past) was in that mode. ``troubles``: a report's
-    ``search_troubles``."""
-    from controller.balance_control import MODES
-
-    out = {"restarts": [0] * len(MODES), "rerun_s": [0.0] * len(MODES),
-           "got_past": [0] * len(MODES)}
-    for trouble in troubles:
-        for m in range(len(MODES)):
-            out["restarts"][m] += trouble["restarts_by_mode"][m]
-            out["rerun_s"][m] += trouble["rerun_s_by_mode"][m]
-        if trouble["outcome"] == "got past" and trouble["last_mode"] is not None:
-            out["got_past"][trouble["last_mode"]] += 1
-    out["rerun_s"] = [round(x, 4) for x in out["rerun_s"]]
-    return out
-
-
-def summed_by_mode(runs) -> dict | None:
-    """:func:`search_by_mode` summed over runs (None when a run lacks it, resumed from a
-    checkpoint of before it was recorded: a sum over some of the runs would read as all)."""
-    parts = [r.get("search_by_mode") for r in runs]
-    if not parts or any(p is None for p in parts):
-        return None
-    return {key: [round(sum(column), 4) for column in zip(*(p[key] for p in parts),
-                                                          strict=True)]
-            for key in ("restarts", "rerun_s", "got_past")}
-
-
-def _budget_spent(run: dict) -> bool:
-    """Whether the search gave up on a trouble of the run with its budget spent."""
-    return any(g["outcome"] == "budget spent" for g in run["search_gave_up"])
-
-
-def summary(result: RobustnessResult) -> dict:
-    """The study as JSON: settings, per-row figures, totals and every run."""
-    from controller.report import software_versions
-
-    rows = [row_summary(result, row) for row in result.rows]
-    return {
-        "format": "upm-controller/robustness", "version": 2,
-        "settings": {**result.settings.as_dict(), "offset_seeds": result.seeds},
-        "software": software_versions(),
-        "totals": {"falls": sum(r["falls"] for r in rows),
-                   "runs": sum(r["runs"] for r in rows),
-                   "falls_budget_spent": sum(r["falls_budget_spent"] for r in rows),
-                   "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
-                   "offset_falls": sum(r["offset_falls"] for r in rows),
-                   "offset_runs": sum(r["offset_runs"] for r in rows),
-                   "search_by_mode": summed_by_mode(result.runs.values())},
-        "rows": rows,
-        "runs": result.runs,
-    }
-
-
-def _fmt_span(span, digits: int) -> str:
-    if span is None:
-        return "-"
-    lo, hi = span
-    return f"{lo:.{digits}f}" if round(lo, digits) == round(hi, digits) else \
-        f"{lo:.{digits}f}-{hi:.{digits}f}"
-
-
-def table_markdown(report: dict) -> str:
-    """The per-row table (markdown)."""
-    s = report["settings"]
-    k = s["offset_seeds"]
-    lines = [
-        f"| row | s | exact reference (seed 0) | falls of {k} offset runs, when (s) | "
-        "the standing runs' error (deg / mm) | ends going down | search retries |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in report["rows"]:
-        e = r["exact"]
-        exact = (f"falls at {e['fall_time_s']:.2f} s" if e["fell"] else
-                 f"stands, {e['error_deg_rms']:.1f} / {e['body_error_mm_mean']:.0f}")
-        when = ", ".join(f"{t:.2f}" for t in r["offset_fall_times_s"])
-        error = (f"{_fmt_span(r['standing_error_deg_rms'], 1)} / "
-                 f"{_fmt_span(r['standing_body_error_mm_mean'], 0)}"
-                 if r["standing_error_deg_rms"] else "-")
-        lines.append(f"| {r['label']} | {r['seconds']:.1f} | {exact} | "
-                     f"{r['offset_falls']}" + (f" ({when})" if when else "") + f" | {error} | "
-                     f"{r['ends_going_down']} of {r['runs'] - r['falls']} | "
-                     f"{_fmt_span(r['search_retries'], 0)} |")
-    t = report["totals"]
-    lines.append("")
-    lines.append(f"Falls: {t['falls']} of {t['runs']} runs ({t['exact_falls']} of "
-                 f"{len(report['rows'])} on the exact references, {t['offset_falls']} of "
-                 f"{t['offset_runs']} on references moved by N(0, {s['offset_deg']:g} deg) "
-                 "per joint channel)" + (", each sequence's pieces cut where the next one's "
-                                         "gait phase matches (`--cut matched`)."
-                                         if s.get("cut") == "matched" else ".")
-                 + (f" Every joint's torque limit x {s['strength']:g} (`--strength`)."
-                    if s.get("strength", 1) != 1 else ""))
-    if t["falls"]:
-        spent, other = t["falls_budget_spent"], t["falls"] - t["falls_budget_spent"]
-        lines.append(f"Of the falls, {spent} came after the search had spent its budget (a "
-                     "larger `--search-budget` may carry them)"
-                     + (f", {other} with no mode left within its reach." if other else "."))
-    by_mode = t.get("search_by_mode")
-    if by_mode and sum(by_mode["restarts"]):
-        lines += ["", *_by_mode_markdown(by_mode)]
-    return "\n".join(lines) + "\n"
-
-
-def _by_mode_markdown(by_mode: dict) -> list[str]:
-    """The search's work by mode, every run together (markdown lines)."""
-    from controller.balance_control import MODES
-
-    total_s = sum(by_mode["rerun_s"]) or 1.0
-    lines = ["The search's work by the mode of the segment each restart changed (every run "
-             "together; a trouble got past counts under its last restart's mode):", "",
-             "| mode | placement gain | swing contacts not planned | swing clearance (m) | "
-             "spine held | restarts | simulated s run again | troubles got past |",
-             "|---|---|---|---|---|---|---|---|"]
-    for m, mode in enumerate(MODES):
-        lines.append(f"| {m} | {mode.placement_gain:g} | {mode.swing_contacts_excluded} | "
-                     f"{mode.swing_clearance_m:g} | {'yes' if mode.spine_held else 'no'} | "
-                     f"{by_mode['restarts'][m]} | "
-                     f"{by_mode['rerun_s'][m]:.1f} "
-                     f"({100 * by_mode['rerun_s'][m] / total_s:.0f} %) | "
-                     f"{by_mode['got_past'][m]} |")
-    return lines
-
-
-def plot(report: dict, path) -> None:
-    """Each row's length and its falls: seed 0 (a diamond) and the offset seeds (dots)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from upm.fileio import atomic_path
-
-    rows = report["rows"]
-    fig, ax = plt.subplots(figsize=(8, 0.4 * len(rows) + 1.4))
-    for y, r in enumerate(rows):
-        ax.plot([0, r["seconds"]], [y, y], color="0.8", lw=6, solid_capstyle="butt")
-        times = r["offset_fall_times_s"]
-        ax.plot(times, [y] * len(times), "o", color="tab:red", ms=5, alpha=0.7)
-        if r["exact"]["fell"]:
-            ax.plot([r["exact"]["fall_time_s"]], [y], "D", color="black", ms=6)
-        ax.text(r["seconds"] + 0.1, y, f"{r['falls']}/{r['runs']}", va="center", fontsize=8)
-    ax.plot([], [], "o", color="tab:red", ms=5, label="fall, offset reference")
-    ax.plot([], [], "D", color="black", ms=6, label="fall, exact reference")
-    ax.set_yticks(range(len(rows)), [r["label"] for r in rows], fontsize=8)
-    ax.set_ylim(len(rows) - 0.5, -0.5)
-    ax.set_xlim(0, 1.1 * max(r["seconds"] for r in rows))
-    ax.set_xlabel("time of the fall in the run, s (grey: the row's length; right: falls "
-                  "of runs)")
-    ax.set_title(f"Falls of the free-root character: exact reference and "
-                 f"{report['settings']['offset_seeds']} offset ones, "
-                 f"N(0, {report['settings']['offset_deg']:g} deg)", fontsize=9)
-    fig.legend(fontsize=8, loc="lower center", ncol=2, frameon=False)
-    fig.tight_layout(rect=(0, 0.25 / fig.get_figheight(), 1, 1))
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-    plt.close(fig)

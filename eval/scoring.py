@@ -3,16 +3,16 @@
 The same function scores a transition's window (the joined motion: segment 1, the L new
 frames, segment 2 re-anchored) and a real window of a test clip (the calibration row):
 
-- **kinematic** (controller.validity) on the window and its two end postures (A, the
+- **kinematic** (controller.checks.validity) on the window and its two end postures (A, the
   frame before it, and B, the frame after): valid frames, the limit excess *added*
   beyond what A and B already have, self-collision, floor penetration;
 - **nearest real posture** (:class:`eval.realdata.RealPostures`) of each window frame;
 - **joint jerk** over the stencils touching the window (its joins included);
-- **dynamics** (controller.dynamics.root_residual) on the window with
+- **dynamics** (controller.checks.dynamics.root_residual) on the window with
   :data:`RESIDUAL_CONTEXT` frames of the motion on each side, for the 12 Hz low-pass and
   the finite differences; the figures are read on the window's frames only;
 - **foot skating** from the same frames' foot geoms;
-- **tracking** (controller.tracking, root driven) over the same frames, read on the window.
+- **tracking** (controller.tracking.servo, root driven) over the same frames, read on the window.
 """
 
 from __future__ import annotations
@@ -141,7 +141,7 @@ def added_self_collision(frame_pairs: list[dict]) -> np.ndarray:
 def end_self_collision(model, motion, window: slice) -> list[bool]:
     """Whether the window's two end postures (the frames just before and after it) are
     themselves in self-collision: [A, B]."""
-    from controller.validity import check_motion
+    from controller.checks.validity import check_motion
 
     n = motion.n_frames
     w0, w1, _ = window.indices(n)
@@ -172,10 +172,10 @@ def score_window(model, motion, window: slice, real, zones) -> dict[str, float]:
     dict of str to float
         By metric name (:data:`eval.metrics.METRICS`), rounded to 6 decimals.
     """
-    from controller.dynamics import root_residual
+    from controller.checks.dynamics import root_residual
+    from controller.checks.validity import check_motion
     from controller.qpos import to_qpos
-    from controller.tracking import track
-    from controller.validity import check_motion
+    from controller.tracking.servo import track
 
     n = motion.n_frames
     w0, w1, _ = window.indices(n)

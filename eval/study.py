@@ -15,7 +15,6 @@ the spacetime optimisation ran up to 30x slower on a loaded machine).
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 
@@ -29,6 +28,7 @@ from eval.pairs import (
     real_exclusion_zone,
 )
 from eval.records import REAL, Records
+from eval.runs import default_workers, single_threaded_blas
 from upm.transitions import METHODS
 
 #: Transition methods of the study, in table order: every registered method.
@@ -71,7 +71,7 @@ class StudyData:
     Attributes
     ----------
     config : StudyConfig
-    catalog : upm.catalog.Catalog
+    catalog : upm.motion.catalog.Catalog
     motions : dict of str to upm.Motion
         The test clips at 120 fps.
     lengths : dict of str to int
@@ -111,7 +111,7 @@ class StudyData:
 def key_sources(catalog, methods, progress: bool = False) -> dict:
     """The key-posture sources the methods need, by method, each built by its registered
     builder (:func:`upm.transitions.build_key_source`) from one shared context: the UPM
-    and the SOM trained on the train split (cached: :func:`upm.map_cache.trained_map`),
+    and the SOM trained on the train split (cached: :func:`upm.maps.map_cache.trained_map`),
     the ablations fitted on every frame of it."""
     from upm.transitions import KeySourceContext, build_key_source
 
@@ -123,7 +123,7 @@ def key_sources(catalog, methods, progress: bool = False) -> dict:
 def prepare(config: StudyConfig, progress: bool = False) -> StudyData:
     """Load the clips and the key-posture sources (training the maps if not cached)."""
     from eval.realdata import RealPostures, load_test_clips
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(config.data_dir)
     motions = load_test_clips(catalog)
@@ -203,14 +203,6 @@ def score_real(data: StudyData, window: RealWindow) -> dict:
 _DATA: StudyData | None = None
 
 
-def single_threaded_blas() -> None:
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(name, "1")
-    from threadpoolctl import threadpool_limits
-
-    threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]), user_api="blas")
-
-
 def _init_worker(config: StudyConfig) -> None:
     global _DATA
     single_threaded_blas()
@@ -225,14 +217,6 @@ def _task(kind: str, item):
 def _task_key(kind: str, item) -> str:
     """``pair/ID`` or ``real/L/ID``: what a failed task is reported as."""
     return f"pair/{item.index}" if kind == "pair" else f"real/{item.frames}/{item.index}"
-
-
-def default_workers() -> int:
-    """The cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:
-        return max(1, os.cpu_count() or 1)
 
 
 # --- the study ----------------------------------------------------------------------------
@@ -309,12 +293,12 @@ def run_study(config: StudyConfig, workers: int | None = None,
         If a task failed (each named): nothing is returned half-done.
     """
     from eval.realdata import FLAT_FLOOR_MAX_BW, floor_residuals
-    from upm.progress import progress
+    from upm.core.progress import progress
     from upm.transitions import METHODS
 
     unknown = [m for m in config.methods if m not in METHODS]
     if unknown:
-        from upm.errors import UsageError
+        from upm.core.errors import UsageError
 
         raise UsageError(f"no transition method {unknown[0]!r} (methods: {', '.join(METHODS)})")
     global _DATA
@@ -329,7 +313,7 @@ def run_study(config: StudyConfig, workers: int | None = None,
     workers = min(workers or default_workers(), len(tasks))
 
     from eval.executor import make_executor
-    from eval.physics import StudyIncomplete
+    from eval.runs import StudyIncomplete
 
     runner = make_executor(executor, workers, address, _init_worker, (config,))
     keyed = [(_task_key(kind, item), (kind, item)) for kind, item in tasks]

@@ -31,8 +31,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from humanoid_xml.frames import vectors_to_mj
-from upm.kinematics import rest_positions
-from upm.skeleton import Skeleton
+from upm.motion.kinematics import rest_positions
+from upm.motion.skeleton import Skeleton
 
 #: Body-mass index used to give a body of a stature its mass, kg/m^2.
 BMI_KG_M2 = 23.0

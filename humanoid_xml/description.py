@@ -1,5 +1,5 @@
 """Skeletons the project owns, described in JSON (``upm-skeleton/1``), turned into a
-:class:`upm.skeleton.Skeleton` like one read from an ASF.
+:class:`upm.motion.skeleton.Skeleton` like one read from an ASF.
 
 The format::
 
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from upm.errors import DataFileError
-from upm.rotations import euler_to_matrix
-from upm.skeleton import JOINTS, ROOT_CHANNELS, Skeleton
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS, ROOT_CHANNELS, Skeleton
+from upm.ops.rotations import euler_to_matrix
 
 FORMAT = "upm-skeleton/1"
 GENERIC_ADULT_JSON = Path(__file__).resolve().parent / "generic_adult.json"

@@ -31,7 +31,7 @@ The model (``build_mjcf``):
   strength went 4-10 degrees past the limit; now a few hundredths of a degree at rest
   and under one degree at the moment of impact (measured in the tests).
 - **Actuators.** A position actuator per hinge, named like its joint, listed in posture
-  order (``upm.skeleton.POSTURE_DOF_NAMES``, declared DOFs only), so a posture is a
+  order (``upm.motion.skeleton.POSTURE_DOF_NAMES``, declared DOFs only), so a posture is a
   control vector (radians). ``ctrlrange`` is inherited from the joint range (radians).
   Gains (:mod:`humanoid_xml.servos`) scale with the mass each joint moves *and* the
   load it bears: ``kp = max(I w^2, min(m g l, tau_max) / theta_sag)``, ``kv = 2 sqrt(kp
@@ -59,8 +59,8 @@ from humanoid_xml.frames import vectors_to_mj
 from humanoid_xml.servos import servo_gains
 from humanoid_xml.strength import torque_limits_nm
 from humanoid_xml.validate import check_skeleton
-from upm.errors import DataFileError
-from upm.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
 GENERATOR_VERSION = "4"
@@ -69,8 +69,8 @@ GENERATOR_VERSION = "4"
 LIMIT_SOLREF = (0.005, 1.0)
 #: Numbers of user data carried with the MuJoCo state (``mjData.userdata``): controllers'
 #: memory from one step to the next that must travel with a saved state (the balance
-#: controller's QP warm start, :mod:`controller.wbc`, and in the last entry the foot
-#: placement's capture-offset difference, :func:`controller.placement.capture_error_m`).
+#: controller's QP warm start, :mod:`controller.balance.wbc`, and in the last entry the foot
+#: placement's capture-offset difference, :func:`controller.balance.placement.capture_error_m`).
 #: It takes no part in the physics.
 USERDATA_SIZE = 100
 LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
@@ -262,7 +262,7 @@ def build_mjcf(skeleton: Skeleton) -> str:
 def _rest_origin_z(skeleton: Skeleton) -> np.ndarray:
     """Height of each body's origin (its bone's proximal end) above the root in the rest
     pose (MuJoCo z), shape (B,) metres."""
-    from upm.kinematics import rest_positions
+    from upm.motion.kinematics import rest_positions
 
     ends_z = vectors_to_mj(rest_positions(skeleton))[:, 2]
     parents = skeleton.parents

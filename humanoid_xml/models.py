@@ -1,6 +1,6 @@
 """Where the models live: the default (generic adult) model kept in the package, and
 subject models built on demand from their ASF and cached outside the repository
-(:func:`upm.cache.cache_dir`), keyed by the ASF's bytes and the generator's own source."""
+(:func:`upm.core.cache.cache_dir`), keyed by the ASF's bytes and the generator's own source."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import os
 from pathlib import Path
 
 from humanoid_xml.generator import GENERATOR_VERSION, build_mjcf
-from upm.cache import cache_dir, digest
-from upm.errors import DataFileError, UsageError
+from upm.core.cache import cache_dir, digest
+from upm.core.errors import DataFileError, UsageError
 
 _PACKAGE = Path(__file__).resolve().parent
 #: The source files whose content decides a generated model.
@@ -51,8 +51,8 @@ def subject_model_path(asf_path: str | os.PathLike) -> Path:
     DataFileError
         If the ASF cannot be read or is malformed.
     """
-    from upm.asf import read_asf
-    from upm.fileio import atomic_write_text
+    from upm.core.fileio import atomic_write_text
+    from upm.motion.asf import read_asf
 
     asf_path = Path(asf_path)
     try:
@@ -67,11 +67,11 @@ def subject_model_path(asf_path: str | os.PathLike) -> Path:
 
 
 def catalog_model_path(catalog, name: str) -> Path:
-    """The cached model of a subject of a :class:`upm.catalog.Catalog`.
+    """The cached model of a subject of a :class:`upm.motion.catalog.Catalog`.
 
     Parameters
     ----------
-    catalog : upm.catalog.Catalog
+    catalog : upm.motion.catalog.Catalog
     name : str
         A subject (``"02"``) or a clip (``"02_01"``: its subject's model).
     """

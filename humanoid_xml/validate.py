@@ -2,14 +2,14 @@
 
 The ASF reader accepts any well-formed skeleton with the 21 joints; the humanoid needs
 more: the bones its segments are made of, a strength figure for every hinge, and bones
-long enough to carry a capsule. Each failure is one :class:`upm.errors.DataFileError`
+long enough to carry a capsule. Each failure is one :class:`upm.core.errors.DataFileError`
 naming the skeleton's own file (and the bone's line when it was read from an ASF).
 """
 
 from __future__ import annotations
 
-from upm.errors import DataFileError
-from upm.skeleton import JOINTS, Skeleton
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS, Skeleton
 
 #: Shortest bone the humanoid accepts (MuJoCo refuses degenerate capsules), m. CMU's
 #: shortest bone is about 2 cm.

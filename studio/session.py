@@ -100,7 +100,7 @@ class Session:
         return self._sources[method]
 
     def _pieces(self):
-        from upm.errors import UsageError
+        from upm.core.errors import UsageError
 
         m1, m2 = self.clip(self.clip1), self.clip(self.clip2)
         if not 0 <= self.a_frame < m1.n_frames or not 0 <= self.b_frame < m2.n_frames:
@@ -121,8 +121,8 @@ class Session:
 
     def recompute(self, method: str | None = None) -> Scene:
         """Transition, capsule poses and per-frame validity of the current settings."""
+        from controller.checks.validity import check_motion
         from controller.qpos import to_qpos
-        from controller.validity import check_motion
 
         start = time.perf_counter()
         model = self.humanoid()
@@ -141,21 +141,21 @@ def offending_bodies(model, validity) -> np.ndarray:
     Parameters
     ----------
     model : mujoco.MjModel
-    validity : controller.validity.Validity
+    validity : controller.checks.validity.Validity
 
     Returns
     -------
     (T, nbody) bool array
         A body is flagged when a DOF of its bone is beyond its limit, when it is in a
-        self-contact deeper than :data:`controller.contacts.SELF_COLLISION_DEPTH_M`, or
-        when it is more than :data:`controller.validity.FLOOR_TOLERANCE_M` below the
+        self-contact deeper than :data:`controller.checks.contacts.SELF_COLLISION_DEPTH_M`, or
+        when it is more than :data:`controller.checks.validity.FLOOR_TOLERANCE_M` below the
         floor: the frame-level flags of :attr:`Validity.valid`, per body.
     """
     import mujoco
 
-    from controller.contacts import SELF_COLLISION_DEPTH_M
-    from controller.validity import FLOOR_TOLERANCE_M
-    from upm.skeleton import POSTURE_DOF_NAMES
+    from controller.checks.contacts import SELF_COLLISION_DEPTH_M
+    from controller.checks.validity import FLOOR_TOLERANCE_M
+    from upm.motion.skeleton import POSTURE_DOF_NAMES
 
     n = validity.n_frames
     out = np.zeros((n, model.nbody), dtype=bool)
@@ -211,7 +211,7 @@ def capsule_poses(model, qpos) -> tuple[np.ndarray, np.ndarray]:
 def export_amc(result, path) -> str:
     """Write the transition (clip 1 context, window, clip 2 context) as AMC or BVH (by the
     extension), atomically."""
-    from upm.motion_io import write_motion
+    from upm.bvh.formats import write_motion
 
     write_motion(path, result.motion)
     return str(path)
@@ -222,7 +222,7 @@ def dof_curve_png(result, linear, path, dof: str | None = None) -> str:
 
     Returns the DOF drawn (``dof``, or the one where the two differ most).
     """
-    from upm.dof_plot import plot_window_dof
+    from upm.transitions.dof_plot import plot_window_dof
 
     return plot_window_dof(path, {result.method: result, "linear": linear}, dof=dof)
 

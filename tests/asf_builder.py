@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from upm.skeleton import JOINTS
+from upm.motion.skeleton import JOINTS
 
 #: Bones of the CMU hierarchy that are not among the 21 joints.
 _OTHER = ("lhipjoint", "rhipjoint", "upperneck", "lwrist", "rwrist", "lfingers", "rfingers",

@@ -32,7 +32,7 @@ def data_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def catalog(data_dir):
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     return Catalog(data_dir)
 

@@ -4,7 +4,7 @@ Every mutator takes the file's bytes and a ``random.Random`` and returns new byt
 truncations, token swaps, absurd finite values, wrong counts (lines dropped or doubled),
 binary junk, other encodings, case changes, degenerate geometry. A test writes the
 result to a file, reads it the way the command line does, and asserts the outcome is a
-clean result or one :class:`upm.errors.DataFileError` naming that file.
+clean result or one :class:`upm.core.errors.DataFileError` naming that file.
 """
 
 from __future__ import annotations

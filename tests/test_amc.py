@@ -8,7 +8,7 @@ from hypothesis.extra.numpy import arrays
 
 from tests.asf_builder import make_amc, make_asf
 from upm import Motion, read_amc, read_asf, write_amc
-from upm.errors import DataFileError
+from upm.core.errors import DataFileError
 
 
 def test_every_clip_parses_with_listed_frame_count(all_motions, catalog):
@@ -28,7 +28,7 @@ def test_units_of_the_first_frame(walk):
                                / 0.45)
     np.testing.assert_allclose(walk.root[0, 3:], [-2.48972, -9.82194, -3.00914])
     # "lfemur -28.0191 -1.02078 -20.1783" and "lclavicle -1.6201e-014 -1.43125e-014" (ry rz)
-    from upm.skeleton import joint_dof_index as ix
+    from upm.motion.skeleton import joint_dof_index as ix
     assert walk.posture_deg[0, ix("lfemur", "rx")] == -28.0191
     assert walk.posture_deg[0, ix("lfemur", "rz")] == -20.1783
     assert walk.posture_deg[0, ix("lclavicle", "ry")] == -1.6201e-14

@@ -6,7 +6,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from upm.angles import angle_diff_deg, angular_distance_sq, interpolate_deg, unwrap_deg, wrap_deg
+from upm.ops.angles import (
+    angle_diff_deg,
+    angular_distance_sq,
+    interpolate_deg,
+    unwrap_deg,
+    wrap_deg,
+)
 
 angles = st.floats(min_value=-5000, max_value=5000, allow_nan=False)
 ratios = st.floats(min_value=0.0, max_value=1.0)

@@ -5,8 +5,9 @@ import pytest
 
 from tests.asf_builder import make_asf
 from upm import read_asf
-from upm.errors import DataFileError
-from upm.skeleton import CLASS_SLICES, JOINTS, POSTURE_DOF_NAMES, joint_dof_index
+from upm.core.errors import DataFileError
+from upm.motion.kinematics import standing_height_m
+from upm.motion.skeleton import CLASS_SLICES, JOINTS, POSTURE_DOF_NAMES, joint_dof_index
 
 
 def test_every_subject_skeleton(catalog):
@@ -20,7 +21,7 @@ def test_every_subject_skeleton(catalog):
         assert skeleton.declared.sum() == 45  # the 21 joints declare 45 DOFs on CMU
         assert np.allclose(np.linalg.norm(skeleton.directions[1:], axis=1), 1.0)
         assert skeleton.length_to_m == pytest.approx(0.0254 / 0.45)
-        assert 1.3 < skeleton.height_m() < 2.0
+        assert 1.3 < standing_height_m(skeleton) < 2.0
 
 
 def test_subject_02_details(catalog):

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from controller import to_qpos
-from controller.balance import follow
-from controller.balance_control import torque_model
-from controller.balance_run import WINDOW_KEYS, replay, window_summary
+from controller.balance.control import torque_model
+from controller.balance.follow import follow
+from controller.balance.run import WINDOW_KEYS, replay, window_summary
 from controller.qpos import joint_layout
-from controller.tracking import track_qpos
+from controller.tracking.servo import track_qpos
 
 
 @pytest.fixture(scope="module")
@@ -126,7 +126,7 @@ def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(lifted):
 
 
 def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
-    from controller.balance_search import TROUBLE_UP
+    from controller.balance.search import TROUBLE_UP
     from controller.qpos import free_joint
 
     # with both feet drawn up the character goes down: the search spends its budget and
@@ -196,7 +196,7 @@ def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_
     # the QP keeps its torques within each joint's strength, so a bound it leans on is
     # met to rounding: those frames count as saturated, whichever side of it rounding
     # put the planned torque, and the torque applied there is the strength itself
-    from controller.wbc import AT_BOUND
+    from controller.balance.wbc import AT_BOUND
 
     run = walk_run
     low, high = torque_model(model02).actuator_forcerange.T
@@ -213,7 +213,7 @@ def test_the_joint_velocity_is_recorded_with_the_torque(model02, walk_run):
     """Each actuator's velocity is its joint's, at the step its torque was applied: it
     follows the simulated angles' own rate, and the report's concentric share of the
     frames at full strength is the share at which torque and velocity have one sign."""
-    from controller.balance_report import BalanceTracking
+    from controller.balance.report import BalanceTracking
 
     run = walk_run
     sim = torque_model(model02)

@@ -11,11 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controller import balance_search, to_qpos
-from controller.balance import follow
-from controller.balance_control import MODES, torque_model
-from controller.balance_report import BalanceTracking
-from controller.balance_run import replay
+from controller import to_qpos
+from controller.balance import search as balance_search
+from controller.balance.control import MODES, torque_model
+from controller.balance.follow import follow
+from controller.balance.report import BalanceTracking
+from controller.balance.run import replay
 from controller.dropouts import fill_dropouts
 from controller.qpos import joint_layout
 
@@ -325,8 +326,8 @@ def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
 def test_02_01_grounded(model02, walk):
     """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
     it; grounded, they touch it (within the low-pass's smoothing)."""
+    from controller.balance.placement import FootPlacement
     from controller.grounding import GROUND_DEPTH_M, floor_clearance, ground_reference
-    from controller.placement import FootPlacement
 
     qpos = to_qpos(model02, walk)
     data = mujoco.MjData(model02)

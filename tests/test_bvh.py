@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from upm.bvh import joint_positions, motion_from_bvh, motion_to_bvh, read_bvh, write_bvh
-from upm.errors import DataFileError
-from upm.kinematics import forward_kinematics, global_transforms
+from upm.core.errors import DataFileError
+from upm.motion.kinematics import forward_kinematics, global_transforms
 
 #: (frames, joints, fps) as stated in the files' headers (shared/data/bvh/README.md).
 FILES = {
@@ -208,7 +208,7 @@ def test_cgspeed_takes_retarget_onto_subject_05_within_a_centimetre(catalog, bvh
     put every 21-joint bone end where the AMC of the same take does (measured worst:
     0.005 mm)."""
     from upm.bvh.retarget import added_tpose, retarget_cmu
-    from upm.skeleton import JOINTS
+    from upm.motion.skeleton import JOINTS
 
     amc = catalog.load(take)
     bvh = read_bvh(bvh_dir / f"{take}.bvh")

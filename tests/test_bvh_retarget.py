@@ -13,9 +13,9 @@ from upm.bvh import read_bvh, write_bvh
 from upm.bvh.joint_maps import END_SITE, find_builtin_map, read_joint_map
 from upm.bvh.kinematics import world_transforms
 from upm.bvh.world_retarget import added_rest_frame, retarget_world
-from upm.errors import DataFileError
-from upm.kinematics import global_transforms
-from upm.skeleton import JOINTS
+from upm.core.errors import DataFileError
+from upm.motion.kinematics import global_transforms
+from upm.motion.skeleton import JOINTS
 
 
 @pytest.fixture(scope="module")
@@ -175,9 +175,9 @@ def test_bad_joint_maps_are_one_line_errors_naming_the_file(tmp_path, text, mess
 
 def test_convert_maps_any_figure_and_takes_the_clips_rate(data_dir, bvh_dir, tmp_path,
                                                           capsys):
-    from upm.amc import read_amc
-    from upm.asf import read_asf
     from upm.cli import main
+    from upm.motion.amc import read_amc
+    from upm.motion.asf import read_asf
 
     data = ["--data", str(data_dir)]
     # named after clip 141_01: subject 141's ASF, 60 fps from clips.csv (the file says 120)

@@ -5,8 +5,8 @@ import warnings
 import numpy as np
 import pytest
 
-from upm.catalog import Catalog, ClipRef, parse_clip_ref
-from upm.errors import UsageError
+from upm.core.errors import UsageError
+from upm.motion.catalog import Catalog, ClipRef, parse_clip_ref
 
 
 def test_catalogue_matches_clips_csv(catalog):
@@ -108,7 +108,7 @@ def test_no_clips_csv_is_one_warning_never_a_silent_rate(tmp_path, data_dir):
     ("02_03", "columns"), (",120", "without a clip name"), ("02_03,1e400", "outside"),
 ])
 def test_bad_clips_csv_rows_name_the_line(tmp_path, data_dir, row, message):
-    from upm.errors import DataFileError
+    from upm.core.errors import DataFileError
 
     (tmp_path / "02").mkdir()
     (tmp_path / "02" / "02_03.amc").write_bytes(b"1\n")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from controller import to_qpos
-from controller.contacts import (
+from controller.checks.contacts import (
     SELF_COLLISION_DEPTH_M,
     collide,
     contacts_over_frames,
@@ -18,7 +18,7 @@ from controller.contacts import (
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from tests.conftest import FLAT_WALK_RUN
 from upm import Motion
-from upm.skeleton import joint_dof_index
+from upm.motion.skeleton import joint_dof_index
 
 
 @pytest.fixture(scope="module")

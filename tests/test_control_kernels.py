@@ -1,4 +1,4 @@
-"""The balance controller's compiled per-step kernels (controller.kernels) are the numpy
+"""The balance controller's compiled per-step kernels (controller.balance.qp_kernels) are the numpy
 formulas they replace: the reference between frames, the targets clipped into the joint
 ranges, the desired acceleration, the capture-offset shift of the swing foot and the swing
 leg's joint change, the applied torques within their range and the QP's inequalities
@@ -11,16 +11,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from controller.kernels import (
-    bound_constraints,
-    capture_shift,
+from controller.balance.leg_kernels import capture_shift, damped_least_squares, move_point
+from controller.balance.qp_kernels import bound_constraints, watched_constraints
+from controller.balance.step_kernels import (
     clip_targets,
     clip_torques,
-    damped_least_squares,
     desired_acceleration,
-    move_point,
     reference_at,
-    watched_constraints,
 )
 
 _finite = st.floats(-10.0, 10.0, allow_nan=False)

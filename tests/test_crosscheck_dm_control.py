@@ -18,7 +18,7 @@ import mujoco  # noqa: E402
 from dm_control import suite  # noqa: E402  (a dev dependency, for this check only)
 from dm_control.suite.utils import parse_amc  # noqa: E402
 
-from upm.kinematics import global_transforms  # noqa: E402
+from upm.motion.kinematics import global_transforms  # noqa: E402
 
 #: dm_control's fixed frame change: (x, y, z)_asf -> (x, -z, y)_mujoco.
 Y_UP_TO_Z_UP = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])

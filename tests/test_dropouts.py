@@ -1,4 +1,4 @@
-"""Marker dropouts (upm.dropouts): found and filled on the real clips, in transitions, and
+"""Marker dropouts (upm.motion.dropouts): found and filled on the real clips, in transitions, and
 the same on the humanoid's hinges as on the AMC channels."""
 
 import numpy as np
@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from upm.dropouts import DROPOUT_JUMP_DEG, dropout_mask, fill_dropouts, joint_runs
-from upm.skeleton import JOINTS
+from upm.motion.dropouts import DROPOUT_JUMP_DEG, dropout_mask, fill_dropouts, joint_runs
+from upm.motion.skeleton import JOINTS
 from upm.transitions import transition
 
 

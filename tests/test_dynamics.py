@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from controller import to_qpos
 from controller.body import body_figures
-from controller.dynamics import (
+from controller.checks.dynamics import (
     SUPPORT_DISTANCE_M,
     finite_differences,
     lowpass_qpos,
@@ -155,8 +155,8 @@ def test_lowpass_keeps_quaternions_unit_and_hemisphere_flips_harmless(model02, w
 def test_root_residual_refuses_non_finite_motion(model02):
     import pytest
 
-    from controller.dynamics import root_residual
-    from upm.errors import UsageError
+    from controller.checks.dynamics import root_residual
+    from upm.core.errors import UsageError
 
     qpos = np.tile(model02.qpos0, (5, 1))
     qpos[2, 7] = np.inf

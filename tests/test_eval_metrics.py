@@ -21,8 +21,8 @@ from eval.metrics import (
 from eval.pairs import RealWindow, Segment, real_exclusion_zone
 from eval.realdata import RealPostures, load_test_clips
 from eval.scoring import added_self_collision, feet_over_frames, score_window
-from upm.motion import Motion
-from upm.skeleton import joint_dof_index
+from upm.motion.motion import Motion
+from upm.motion.skeleton import joint_dof_index
 
 FPS = 120.0
 
@@ -73,7 +73,7 @@ def test_every_metric_is_scored(real_segment):
 
 
 def test_real_segment_scores_the_real_kinematics(real_segment, model):
-    from controller.validity import check_motion
+    from controller.checks.validity import check_motion
 
     walk, window, scores = real_segment["walk"], real_segment["window"], real_segment["own"]
     validity = check_motion(model, walk, (window,))
@@ -105,7 +105,7 @@ def test_real_segment_is_its_own_nearest_real_posture(real_segment, real):
 
 
 def test_real_segment_jerk_and_dynamics(real_segment, model, real):
-    from controller.dynamics import root_residual
+    from controller.checks.dynamics import root_residual
     from controller.qpos import to_qpos
 
     walk, window, scores = real_segment["walk"], real_segment["window"], real_segment["own"]

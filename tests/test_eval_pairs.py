@@ -11,7 +11,7 @@ from eval.pairs import (
     exclusion_zones,
     real_exclusion_zone,
 )
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from eval.physics import PHYSICS_METRICS, StudyIncomplete, run_physics
+from eval.physics import PHYSICS_METRICS, run_physics
 from eval.records import Records
+from eval.runs import StudyIncomplete
 from eval.study import STUDY_METHODS, StudyConfig, run_study
 
 PAIRS = 3

@@ -7,7 +7,7 @@ import pytest
 
 from eval.metrics import METRICS
 from eval.records import COLUMNS, REAL, Records, csv_text
-from upm.errors import DataFileError
+from upm.core.errors import DataFileError
 
 
 def _table() -> Records:

@@ -3,9 +3,9 @@
 import pytest
 
 from tests.transition_data import pair, sources
-from upm.dof_plot import SHOULDER_DOFS, plot_window_dof
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 from upm.transitions import transition
+from upm.transitions.dof_plot import SHOULDER_DOFS, plot_window_dof
 
 
 @pytest.fixture(scope="module")

@@ -2,7 +2,7 @@
 
 import pytest
 
-from upm.fileio import atomic_open, atomic_write_text
+from upm.core.fileio import atomic_open, atomic_write_text
 
 
 def test_failure_midway_leaves_the_old_file(tmp_path):

@@ -1,4 +1,4 @@
-"""The swing foot kept at the reference's tilt (controller.foot_tilt), on the real walk
+"""The swing foot kept at the reference's tilt (controller.balance.foot_tilt), on the real walk
 02_01: the reference's own state asks for no change; a swing hip and knee moved by up to 10
 degrees leave the foot pitched, and one step of the ankle's targets turns it back; a foot on
 the floor is left alone."""
@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from controller import to_qpos
-from controller.foot_tilt import SwingFootTilt
+from controller.balance.foot_tilt import SwingFootTilt
 
 LEGS = {0: ("lfemur_rx", "lfemur_ry", "lfemur_rz", "ltibia_rx"),
         1: ("rfemur_rx", "rfemur_ry", "rfemur_rz", "rtibia_rx")}
@@ -97,13 +97,13 @@ def test_a_foot_on_the_floor_is_left_alone(setup):
        up=arrays(np.float64, 3, elements=st.floats(-1.0, 1.0)),
        axes=arrays(np.float64, (2, 3), elements=st.floats(-1.0, 1.0)))
 def test_the_compiled_ankle_turn_is_the_damped_least_squares(rotation, up, axes):
-    """The compiled step (:func:`controller.kernels.tilt_ankle`) is the module's damped
+    """The compiled step (:func:`controller.balance.qp_kernels.tilt_ankle`) is the module's damped
     least squares, ``delta = (A^T A + damping I)^-1 A^T ((R up) x z)``, for any foot
     orientation ``R`` and hinge axes ``A`` (columns)."""
     from scipy.spatial.transform import Rotation
 
-    from controller.foot_tilt import DAMPING
-    from controller.kernels import tilt_ankle
+    from controller.balance.foot_tilt import DAMPING
+    from controller.balance.leg_kernels import tilt_ankle
 
     R = Rotation.from_rotvec(rotation).as_matrix()
     xaxis = np.zeros((5, 3))

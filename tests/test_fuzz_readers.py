@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.fuzz_mutations import ASF_MUTATORS, CSV_MUTATORS, mutate, mutate_npz, zip_bomb
-from upm.errors import DataFileError
+from upm.core.errors import DataFileError
 
 N_CASES = 300
 
@@ -41,7 +41,7 @@ def amc_bytes(data_dir):
 
 def test_mutated_asf_is_read_or_refused_naming_it(tmp_path, asf_bytes):
     from humanoid_xml.validate import check_skeleton
-    from upm.asf import read_asf
+    from upm.motion.asf import read_asf
 
     rng = random.Random(15)
     outcomes = {"read": 0, "refused": 0}
@@ -83,7 +83,7 @@ def test_mutated_asf_builds_a_humanoid_or_names_the_asf(tmp_path, asf_bytes):
 def test_humanoid_refuses_a_degenerate_hand_naming_the_asf_line(tmp_path, asf_bytes, text,
                                                                   message):
     from humanoid_xml import build_mjcf
-    from upm.asf import read_asf
+    from upm.motion.asf import read_asf
 
     lines = asf_bytes.decode().splitlines()
     begin = next(i for i, line in enumerate(lines) if line.strip() == "name rhand") - 2
@@ -102,7 +102,7 @@ def test_humanoid_refuses_a_degenerate_hand_naming_the_asf_line(tmp_path, asf_by
 
 
 def test_mutated_amc_is_read_or_refused_naming_it(tmp_path, catalog, amc_bytes):
-    from upm.amc import read_amc
+    from upm.motion.amc import read_amc
 
     skeleton = catalog.skeleton("02")
     rng = random.Random(150)
@@ -124,7 +124,7 @@ def test_mutated_amc_is_read_or_refused_naming_it(tmp_path, catalog, amc_bytes):
 
 @pytest.mark.parametrize("number", ["\u00b2", "\u00b9", "9" * 5000, "1234567890"])
 def test_amc_frame_numbers_are_short_ascii_digits(tmp_path, catalog, amc_bytes, number):
-    from upm.amc import read_amc
+    from upm.motion.amc import read_amc
 
     path = tmp_path / "bad.amc"
     lines = amc_bytes.splitlines()
@@ -137,7 +137,7 @@ def test_amc_frame_numbers_are_short_ascii_digits(tmp_path, catalog, amc_bytes, 
 
 
 def test_mutated_clips_csv_is_read_or_refused_naming_it(tmp_path, data_dir):
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     source = (data_dir / "clips.csv").read_bytes().split(b"\n")
     csv_bytes = b"\n".join(source[:12]) + b"\n"
@@ -163,7 +163,7 @@ def test_mutated_clips_csv_is_read_or_refused_naming_it(tmp_path, data_dir):
 
 @pytest.fixture(scope="module")
 def map_bytes(tmp_path_factory, catalog):
-    from upm.posture_map import UniformPostureMap
+    from upm.maps.posture_map import UniformPostureMap
 
     x = catalog.load("02_01").posture_deg[::20]
     path = tmp_path_factory.mktemp("map") / "map.npz"
@@ -173,7 +173,7 @@ def map_bytes(tmp_path_factory, catalog):
 
 def test_mutated_map_is_loaded_or_refused_naming_it(tmp_path, map_bytes):
     from upm.commands.train import summary_rows
-    from upm.posture_map import load_map
+    from upm.maps.map_file import load_map
 
     rng = random.Random(15000)
     outcomes = {"loaded": 0, "refused": 0}
@@ -192,7 +192,7 @@ def test_mutated_map_is_loaded_or_refused_naming_it(tmp_path, map_bytes):
 
 
 def test_a_zip_bomb_map_is_refused_unread(tmp_path, map_bytes):
-    from upm.posture_map import load_map
+    from upm.maps.map_file import load_map
 
     path = tmp_path / "bomb.npz"
     path.write_bytes(zip_bomb(map_bytes, megabytes=64))
@@ -207,7 +207,7 @@ def test_a_map_member_with_an_unbalanced_npy_header_names_the_map(tmp_path, map_
     import io
     import zipfile
 
-    from upm.posture_map import load_map
+    from upm.maps.map_file import load_map
 
     out = io.BytesIO()
     with zipfile.ZipFile(io.BytesIO(map_bytes)) as src, zipfile.ZipFile(out, "w") as dst:
@@ -228,7 +228,7 @@ def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
     import zipfile
 
     from tests.fuzz_mutations import object_npy
-    from upm.posture_map import load_map
+    from upm.maps.map_file import load_map
 
     # A protocol-0 pickle stream, written by hand, that exits the process if unpickled.
     boom = b"cbuiltins\nexec\n(Vraise SystemExit('unpickled')\ntR."
@@ -247,7 +247,7 @@ def test_an_object_array_map_is_refused_never_unpickled(tmp_path, map_bytes):
 def test_amc_is_read_in_memory_bounded_by_three_times_its_size(tmp_path, catalog, data_dir):
     import tracemalloc
 
-    from upm.amc import read_amc
+    from upm.motion.amc import read_amc
 
     text = (data_dir / "02" / "02_01.amc").read_text()
     header, _, body = text.partition("\n1\n")

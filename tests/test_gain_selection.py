@@ -4,7 +4,7 @@ rollouts are stubbed (the costs given here): what is tested is the schedule."""
 
 import math
 
-from controller.gain_selection import REFINE_COST, GainSelector
+from controller.balance.gain_selection import REFINE_COST, GainSelector
 
 EVERY = 60  # frames between choices (0.5 s at 120 fps)
 

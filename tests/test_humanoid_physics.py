@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from controller.qpos import joint_layout
-from controller.tracking import track, track_qpos
+from controller.tracking.servo import track, track_qpos
 from humanoid_xml import build_mjcf, default_model_path, generic_skeleton, hinge_names
 from humanoid_xml.body import FOOT_LENGTH_H, HEEL_SHARE_OF_FOOT, capsules, stature_m
 from humanoid_xml.strength import GRAVITY, REFERENCE_MASS_KG, STRENGTH, torque_limits_nm
 from upm import Motion
-from upm.skeleton import joint_dof_index
+from upm.motion.skeleton import joint_dof_index
 
 #: The subjects of the standing measurements (and the generic adult).
 STANDING = ("02", "05", "16", "35", "generic")

@@ -11,16 +11,16 @@ import pytest
 
 import humanoid_xml
 from controller import to_qpos
-from controller.contacts import collide, state_contacts
+from controller.checks.contacts import collide, state_contacts
 from humanoid_xml import build_mjcf, default_model_path, generic_skeleton, hinge_names
 from humanoid_xml.body import BMI_KG_M2, SEGMENT_MASS_FRACTIONS, capsules, stature_m
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from humanoid_xml.frames import ASF_TO_MJ, vectors_to_mj
 from humanoid_xml.servos import SAG_DEG, SERVO_FREQUENCY_HZ, servo_gains
 from upm import Motion, read_amc, read_asf
-from upm.errors import DataFileError
-from upm.kinematics import forward_kinematics, global_transforms
-from upm.skeleton import POSTURE_DOF_NAMES, joint_dof_index
+from upm.core.errors import DataFileError
+from upm.motion.kinematics import forward_kinematics, global_transforms
+from upm.motion.skeleton import POSTURE_DOF_NAMES, joint_dof_index
 
 
 def _subjects(catalog):

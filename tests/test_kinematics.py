@@ -9,9 +9,9 @@ from scipy.spatial.transform import Rotation
 
 from tests.asf_builder import make_asf
 from upm import Motion, forward_kinematics, read_asf
-from upm.kinematics import global_transforms
-from upm.rotations import euler_to_matrix
-from upm.skeleton import joint_dof_index
+from upm.motion.kinematics import global_transforms
+from upm.motion.skeleton import joint_dof_index
+from upm.ops.rotations import euler_to_matrix
 
 WALKS = ("02_01", "02_02", "05_01", "16_15", "35_01")
 

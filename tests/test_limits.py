@@ -4,7 +4,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from upm.limits import limit_excess_deg, outside_share
+from upm.motion.limits import limit_excess_deg, outside_share
 
 limits = np.array([[-160.0, 20.0], [-10.0, 170.0], [0.0, 0.0]])
 

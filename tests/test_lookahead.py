@@ -10,10 +10,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from controller import gain_selection, to_qpos
-from controller.balance import follow
-from controller.balance_control import MODES, torque_model
-from controller.lookahead import Lookahead
+from controller import to_qpos
+from controller.balance import gain_selection
+from controller.balance.control import MODES, torque_model
+from controller.balance.follow import follow
+from controller.balance.lookahead import Lookahead
 
 
 @pytest.fixture(scope="module")
@@ -159,7 +160,7 @@ class _Coasting:
 
 
 def test_a_rollout_that_strays_from_the_reference_pace_costs_more(model02, monkeypatch):
-    from controller import lookahead
+    from controller.balance import lookahead
 
     sim = torque_model(model02)
     sim.opt.gravity[:] = 0.0  # nothing but the root's own velocity moves it

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from upm.map_cache import map_key, trained_map
-from upm.skeleton import CLASS_NAMES
+from upm.maps.map_cache import map_key, trained_map
+from upm.motion.skeleton import CLASS_NAMES
 
 CLIPS = ["09_06", "141_01"]
 

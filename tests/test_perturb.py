@@ -1,12 +1,12 @@
-"""Seeded joint-angle offsets (upm.perturb) on the real clips."""
+"""Seeded joint-angle offsets (upm.motion.perturb) on the real clips."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from upm.dropouts import dropout_mask
-from upm.perturb import offset_joint_angles
+from upm.motion.dropouts import dropout_mask
+from upm.motion.perturb import offset_joint_angles
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The foot placement's capture-offset rule (controller.placement) on the real run 09_06,
+"""The foot placement's capture-offset rule (controller.balance.placement) on the real run 09_06,
 whose flights the character cuts short: a foot put down before the reference lands it, or
 still down after the reference lifts it, is compared with the reference as it lands it or
 last stood on it, not with the reference in the air."""
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from controller import to_qpos
-from controller.placement import FootPlacement, capture_error_m
+from controller.balance.placement import FootPlacement, capture_error_m
 
 
 @pytest.fixture(scope="module")

@@ -8,15 +8,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from upm.angles import angle_diff_deg, interpolate_deg, wrap_deg
-from upm.angular_search import AngularIndex, pairwise_sq_deg, rowwise_sq_deg
-from upm.class_maps import nearest_distance_deg, off_data_share
-from upm.errors import DataFileError, UsageError
-from upm.posture_map import UniformPostureMap, default_radius_deg, load_map
-from upm.skeleton import CLASS_NAMES, CLASS_SLICES
-from upm.som import default_grid, train_som_class
-from upm.torus_tree import TorusForest
-from upm.upm_training import _batch_step, _GrowingMap, _MapSearch, train_upm_class
+from upm.core.errors import DataFileError, UsageError
+from upm.maps.angular_search import AngularIndex, pairwise_sq_deg, rowwise_sq_deg
+from upm.maps.class_maps import nearest_distance_deg, off_data_share
+from upm.maps.growing_map import GrowingMap, MapSearch
+from upm.maps.map_file import load_map
+from upm.maps.map_size import default_radius_deg
+from upm.maps.posture_map import UniformPostureMap
+from upm.maps.som import default_grid, train_som_class
+from upm.maps.torus_tree import TorusForest
+from upm.maps.upm_training import _batch_step, train_upm_class
+from upm.motion.skeleton import CLASS_NAMES, CLASS_SLICES
+from upm.ops.angles import angle_diff_deg, interpolate_deg, wrap_deg
 
 # -- exact search under wrapped distance ----------------------------------------------
 
@@ -90,10 +93,10 @@ def test_batch_size_one_is_the_sequential_algorithm(seed):
 
 
 def _one_batch(neurons, samples, radius, neighbourhood, eta):
-    grow = _GrowingMap(np.asarray(neurons[0], float))
+    grow = GrowingMap(np.asarray(neurons[0], float))
     if len(neurons) > 1:
         grow.append(np.asarray(neurons[1:], float))
-    search = _MapSearch(grow, radius)
+    search = MapSearch(grow, radius)
     winner, born = _batch_step(grow, search, np.asarray(samples, float),
                                np.full(len(samples), -1), radius**2, neighbourhood, eta)
     return grow.current, winner, born
@@ -204,8 +207,8 @@ def test_key_posture_of_the_bent_elbow_stays_on_the_data():
 
 def test_on_the_train_split(catalog):
     """Trains both maps on the whole train split once; every real-data figure here."""
-    from upm.class_maps import postures_of_clips
-    from upm.map_cache import trained_map
+    from upm.maps.class_maps import postures_of_clips
+    from upm.maps.map_cache import trained_map
 
     x, names = postures_of_clips(catalog, catalog.names("train"))
     # The study's maps: trained here, or by whichever test needed them first (cached).
@@ -235,7 +238,7 @@ def test_on_the_train_split(catalog):
 
 @pytest.fixture(scope="module")
 def small_map(catalog):
-    from upm.class_maps import postures_of_clips
+    from upm.maps.class_maps import postures_of_clips
 
     x, names = postures_of_clips(catalog, ["02_02", "09_06", "35_01"])
     return UniformPostureMap().fit(x, clip_names=names), x
@@ -275,7 +278,7 @@ def test_small_map_is_bit_for_bit_the_one_trained_before_the_speed_ups(small_map
 def test_compiled_nearest_neuron_is_the_angular_index_bit_for_bit(small_map):
     """What the training's default R and quantisation error now use, against the search
     they used before, on real frames: same neurons, same distance bits."""
-    from upm.torus_tree import nearest_neuron
+    from upm.maps.torus_tree import nearest_neuron
 
     upm, x = small_map
     for c in CLASS_NAMES:
@@ -346,7 +349,7 @@ def test_compiled_key_posture_is_the_per_class_search_on_real_pairs(catalog):
     real held-out frames: identical, except where two neurons of a class are at exactly
     the nearest distance (the map holds near-duplicate neurons; the two searches break
     such ties differently): then both are nearest and within 1e-12 degrees."""
-    from upm.map_cache import trained_map
+    from upm.maps.map_cache import trained_map
 
     upm = trained_map(catalog, "upm")
     frames = np.concatenate([catalog.load(n).posture_deg for n in catalog.names("test")])

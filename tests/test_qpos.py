@@ -11,10 +11,10 @@ from controller import from_qpos, posture_to_ctrl, to_qpos
 from controller.qpos import qpos_to_root, root_to_qpos
 from humanoid_xml import build_mjcf
 from humanoid_xml.frames import ASF_TO_MJ
-from upm.angles import angle_diff_deg
-from upm.kinematics import forward_kinematics
-from upm.rotations import euler_to_matrix
-from upm.skeleton import joint_dof_index
+from upm.motion.kinematics import forward_kinematics
+from upm.motion.skeleton import joint_dof_index
+from upm.ops.angles import angle_diff_deg
+from upm.ops.rotations import euler_to_matrix
 
 
 def _joint_qpos(model, qpos, name):

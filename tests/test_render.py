@@ -17,7 +17,7 @@ from controller.render import (
     side_view,
     write_video,
 )
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 
 
 @pytest.fixture(scope="module")

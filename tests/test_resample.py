@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from upm.angles import angle_diff_deg
-from upm.errors import UsageError
-from upm.resample import resample
-from upm.rotations import euler_to_matrix
+from upm.core.errors import UsageError
+from upm.motion.resample import resample
+from upm.ops.angles import angle_diff_deg
+from upm.ops.rotations import euler_to_matrix
 from upm.transitions.slerp import rotation_angle_deg
 
 

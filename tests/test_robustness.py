@@ -16,11 +16,11 @@ from eval.robustness import (
     parse_rows,
     reference,
     run_robustness,
-    summed_by_mode,
 )
-from upm.catalog import Catalog
+from eval.robustness_report import summed_by_mode
 from upm.cli import main
-from upm.errors import UsageError
+from upm.core.errors import UsageError
+from upm.motion.catalog import Catalog
 
 
 @pytest.mark.parametrize("text, row", [
@@ -102,7 +102,7 @@ def test_a_run_is_upm_simulate_on_the_same_offset_reference(data_dir, tmp_path, 
 
 
 def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
-    from eval.physics import Checkpoint
+    from eval.runs import Checkpoint
 
     settings = Settings(str(data_dir), None, 0.1, None)
     row = Row(("02_01@0:60",))

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from tests.transition_data import window_edges
-from upm.errors import UsageError
-from upm.resample import resample
+from upm.core.errors import UsageError
+from upm.motion.resample import resample
 from upm.transitions import Transition, build_sequence
 
 

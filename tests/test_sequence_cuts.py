@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from upm.cli import main
-from upm.kinematics import forward_kinematics
+from upm.motion.kinematics import forward_kinematics
 from upm.transitions import build_sequence
 from upm.transitions.cuts import MATCH_SEARCH_S, matched_cut, matched_pieces
 

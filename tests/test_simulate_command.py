@@ -124,9 +124,9 @@ def test_free_root_is_the_balance_controller_by_default(tmp_path, data_dir, cata
     import numpy as np
 
     from controller import to_qpos
-    from controller.balance_run import BalanceRun, replay
+    from controller.balance.run import BalanceRun, replay
     from humanoid_xml import catalog_model_path, load_model
-    from upm.amc import read_amc
+    from upm.motion.amc import read_amc
 
     out = tmp_path / "free.json"
     assert main(["simulate", "--data", str(data_dir), "--method", "linear", "--frames", "20",

@@ -3,12 +3,19 @@
 import numpy as np
 import pytest
 
-from upm.angles import angle_diff_deg
-from upm.class_maps import nearest_distance_deg
-from upm.errors import DataFileError, UsageError
-from upm.posture_map import UniformPostureMap, load_map
-from upm.skeleton import CLASS_NAMES, CLASS_SLICES
-from upm.som import KohonenSOM, circular_mean_deg, default_grid, grid_coordinates, train_som_class
+from upm.core.errors import DataFileError, UsageError
+from upm.maps.class_maps import nearest_distance_deg
+from upm.maps.map_file import load_map
+from upm.maps.posture_map import UniformPostureMap
+from upm.maps.som import (
+    KohonenSOM,
+    circular_mean_deg,
+    default_grid,
+    grid_coordinates,
+    train_som_class,
+)
+from upm.motion.skeleton import CLASS_NAMES, CLASS_SLICES
+from upm.ops.angles import angle_diff_deg
 
 
 def test_circular_mean_wraps():
@@ -46,7 +53,7 @@ def test_som_is_deterministic_and_sized_by_its_grid():
 
 @pytest.fixture(scope="module")
 def som_and_data(catalog):
-    from upm.class_maps import postures_of_clips
+    from upm.maps.class_maps import postures_of_clips
 
     x, names = postures_of_clips(catalog, ["02_02", "09_06"])
     return KohonenSOM(grid=(6, 8), epochs=6).fit(x, clip_names=names), x

@@ -175,7 +175,7 @@ def _free_port() -> int:
 
 def test_export_and_physics_check_of_the_window(session, tmp_path):
     from studio.session import export_amc, physics_check
-    from upm.amc import read_amc
+    from upm.motion.amc import read_amc
 
     result = session.transition()
     path = export_amc(result, tmp_path / "t.amc")

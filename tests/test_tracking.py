@@ -10,7 +10,7 @@ import pytest
 
 from controller import to_qpos
 from controller.qpos import joint_layout
-from controller.tracking import (
+from controller.tracking.servo import (
     FALL_FRACTION,
     physics_substeps,
     plan_tracking,
@@ -18,7 +18,7 @@ from controller.tracking import (
     track,
     track_qpos,
 )
-from upm.skeleton import joint_dof_index
+from upm.motion.skeleton import joint_dof_index
 
 
 @pytest.fixture(scope="module")

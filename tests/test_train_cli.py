@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from upm.cli import main
-from upm.posture_map import load_map
+from upm.maps.map_file import load_map
 
 
 def test_train_then_map_info(data_dir, tmp_path, capsys):

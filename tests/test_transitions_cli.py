@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from upm.amc import read_amc
 from upm.cli import main
+from upm.motion.amc import read_amc
 
 
 def test_transition_writes_amc_and_json(data_dir, catalog, tmp_path, capsys):

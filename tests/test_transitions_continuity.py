@@ -11,13 +11,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from controller.kinematic_check import HumanoidChecker
+from controller.checks.kinematic_check import HumanoidChecker
 from tests.transition_data import PAIRS, feasible_limit_turns, pair, sources, window_edges
-from upm.angles import angle_diff_deg
-from upm.limits import limit_excess_deg
-from upm.posture_map import UniformPostureMap
-from upm.skeleton import POSTURE_DOF_NAMES
-from upm.som import KohonenSOM
+from upm.maps.posture_map import UniformPostureMap
+from upm.maps.som import KohonenSOM
+from upm.motion.limits import limit_excess_deg
+from upm.motion.skeleton import POSTURE_DOF_NAMES
+from upm.ops.angles import angle_diff_deg
 from upm.transitions import METHODS, ClassNearest, NearestPosture, transition
 from upm.transitions.feasible import FeasibleKeys
 

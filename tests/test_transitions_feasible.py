@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import upm.transitions.feasible as feasible_module
-from controller.kinematic_check import HumanoidChecker
-from controller.validity import added_excess, check_motion, limit_excess
+from controller.checks.kinematic_check import HumanoidChecker
+from controller.checks.validity import added_excess, check_motion, limit_excess
 from tests.transition_data import (
     PAIRS,
     catalog_of,
@@ -44,7 +44,7 @@ def _real_pairs(data_dir):
 
 def _added_excess_deg(result) -> np.ndarray:
     """The study's added excess of the window frames, (L, 63): beyond the larger excess of
-    A and B, per DOF (controller.validity)."""
+    A and B, per DOF (controller.checks.validity)."""
     ends = result.motion.posture_deg[result.a_index:result.b_index + 1]
     excess = limit_excess(ends, result.motion.skeleton.limits_deg)
     return added_excess(excess, [slice(1, ends.shape[0] - 1)])[1:-1]
@@ -75,7 +75,7 @@ def test_every_frame_in_range_joins_c1_and_key_collision_free(data_dir):
 
 
 def test_the_checker_agrees_with_the_study(data_dir):
-    """HumanoidChecker's pairs are the study's (controller.validity on the subject's model)
+    """HumanoidChecker's pairs are the study's (controller.checks.validity on the subject's model)
     on real frames with and without self-collision."""
     from humanoid_xml import catalog_model_path, load_model
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from tests.transition_data import pair, sources
-from upm.amc import read_amc, write_amc
-from upm.angles import angle_diff_deg
-from upm.errors import UsageError
+from upm.core.errors import UsageError
+from upm.motion.amc import read_amc, write_amc
+from upm.ops.angles import angle_diff_deg
 from upm.transitions import KEY_POSTURE_METHODS, METHODS, ClassNearest, transition
 
 

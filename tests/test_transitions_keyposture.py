@@ -7,9 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.transition_data import pair, sources
-from upm.angles import angle_diff_deg, angular_distance_sq, interpolate_deg, wrap_deg
-from upm.errors import UsageError
-from upm.skeleton import CLASS_SLICES
+from upm.core.errors import UsageError
+from upm.motion.skeleton import CLASS_SLICES
+from upm.ops.angles import angle_diff_deg, angular_distance_sq, interpolate_deg, wrap_deg
 from upm.transitions import ClassNearest, NearestPosture, make_problem, transition
 
 KEY_METHODS = ("upm", "som", "classnn", "snap")
@@ -123,7 +123,7 @@ def test_alpha_moves_the_key_monotonically_from_a_to_b(data_dir, method):
     for the maps, the neurons nearest A and B. In between, the key and the window's middle
     frame move along A->B without going back (nearest-neighbour search along a segment is
     monotone in the projection, class by class)."""
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     clip = Catalog(data_dir).load("02_02")
     before, after = clip.frames(60, 101), clip.frames(150, 190)  # A = 100, B = 150: even

@@ -7,9 +7,9 @@ import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
 from tests.transition_data import PAIRS, catalog_of, pair
-from upm.angles import angle_diff_deg, interpolate_deg
-from upm.rotations import euler_to_matrix
-from upm.skeleton import JOINTS
+from upm.motion.skeleton import JOINTS
+from upm.ops.angles import angle_diff_deg, interpolate_deg
+from upm.ops.rotations import euler_to_matrix
 from upm.transitions import make_problem, transition
 from upm.transitions import spacetime as spacetime_module
 from upm.transitions.inertialize import quintic_offset

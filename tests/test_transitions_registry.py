@@ -4,7 +4,7 @@ source is built) is usable by ``transition``, the command line and the study."""
 import numpy as np
 import pytest
 
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 from upm.transitions import METHODS, TransitionMethod, WindowResult, register
 from upm.transitions.registry import KeySourceContext, build_key_source, unregister
 

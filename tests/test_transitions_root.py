@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from tests.transition_data import PAIRS, pair
-from upm.angles import wrap_deg
-from upm.kinematics import forward_kinematics
-from upm.rotations import axis_rotation, continuous_euler_deg, euler_to_matrix
+from upm.motion.kinematics import forward_kinematics
+from upm.ops.angles import wrap_deg
+from upm.ops.rotations import axis_rotation, continuous_euler_deg, euler_to_matrix
 from upm.transitions import match_clip, transition
 from upm.transitions.root import heading_deg, leg_length_m
 from upm.transitions.slerp import rotation_angle_deg

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from upm.rotations import (
+from upm.ops.rotations import (
     continuous_euler_deg,
     euler_to_matrix,
     matrix_to_euler_deg,

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controller.validity import (
+from controller.checks.validity import (
     FLOOR_TOLERANCE_M,
     added_excess,
     calibrate,
@@ -19,7 +19,7 @@ from controller.validity import (
 from humanoid_xml import build_mjcf
 from tests.conftest import FLAT_WALK_RUN
 from upm import Motion
-from upm.skeleton import POSTURE_DOF_NAMES, joint_dof_index
+from upm.motion.skeleton import POSTURE_DOF_NAMES, joint_dof_index
 
 
 @pytest.fixture(scope="module")

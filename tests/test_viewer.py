@@ -19,7 +19,7 @@ import sys
 from controller.qpos import to_qpos
 from controller.render import play_in_viewer
 from humanoid_xml import catalog_model_path, load_model
-from upm.catalog import Catalog
+from upm.motion.catalog import Catalog
 catalog = Catalog(sys.argv[1])
 motion = catalog.load("02_01").frames(0, 120)
 model = load_model(catalog_model_path(catalog, "02_01"))

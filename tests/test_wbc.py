@@ -1,8 +1,8 @@
-"""The whole-body QP (controller.wbc) on states of a real free-root walk (02_01): its
-compiled set-up (controller.kernels) is the least squares the module documents, built here
-again row by row with numpy; the solve that starts from the torque bounds near binding
-finds the minimiser of the QP with every bound; the swing leg's damped least squares is
-its formula."""
+"""The whole-body QP (controller.balance.wbc) on states of a real free-root walk (02_01):
+its compiled set-up (controller.balance.qp_kernels) is the least squares the module
+documents, built here again row by row with numpy; the solve that starts from the torque
+bounds near binding finds the minimiser of the QP with every bound; the swing leg's damped
+least squares is its formula."""
 
 import math
 
@@ -12,24 +12,19 @@ import pytest
 import quadprog
 
 from controller import to_qpos
-from controller.balance import follow
-from controller.balance_control import SPINE_FREE_M, SPINE_HELD_M, BalanceControl
-from controller.contacts import floor_contacts
-from controller.kernels import (
-    damped_least_squares,
-    qp_terms,
-    recall_active,
-    remember_active,
-    solve_active_set,
-)
-from controller.placement import FootPlacement, capture_error_m
-from controller.wbc import (
+from controller.balance.control import SPINE_FREE_M, SPINE_HELD_M, BalanceControl
+from controller.balance.follow import follow
+from controller.balance.leg_kernels import damped_least_squares
+from controller.balance.placement import FootPlacement, capture_error_m
+from controller.balance.qp_kernels import qp_terms, recall_active, remember_active, solve_active_set
+from controller.balance.wbc import (
     CONTACT_DAMPING,
     FORCE_TOLERANCE,
     MULTIPLIER_TOLERANCE,
     SPINE_BODIES,
     WholeBodyID,
 )
+from controller.checks.contacts import floor_contacts
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +83,7 @@ def _terms(solver, data, exclude):
 
 
 def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des, spine_held=0.0):
-    """A and b of the rows listed in controller.wbc, and qdd = G x + g0, tau = T x + t0."""
+    """A and b of the rows listed in controller.balance.wbc, and qdd = G x + g0, tau = T x + t0."""
     w, nv = solver.w, solver.nv
     nj, nc = nv - 6, Jc.shape[0] // 3
     nl = 4 * nc
@@ -137,7 +132,9 @@ def test_a_mode_without_the_hold_leaves_the_spine_free(model02, walk, monkeypatc
     a spine weighted like every hinge (the search's other modes are such runs)."""
     from dataclasses import replace
 
-    from controller import balance, balance_control, gain_selection, wbc
+    from controller.balance import control as balance_control
+    from controller.balance import follow as balance
+    from controller.balance import gain_selection, wbc
 
     qpos = to_qpos(model02, walk)[:61]
     free = balance_control.MODES[0]._replace(spine_held=False)

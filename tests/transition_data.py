@@ -7,8 +7,8 @@ import functools
 
 import numpy as np
 
-from upm.angles import angle_diff_deg
-from upm.catalog import Catalog
+from upm.motion.catalog import Catalog
+from upm.ops.angles import angle_diff_deg
 
 #: Real pairs (clip 1, frame A, clip 2, frame B): a walk into a run, a walk into a dance
 #: of another subject, a 60 fps salsa into a walk (resampled), a karate kata whose root
@@ -36,7 +36,7 @@ def sources(data_dir) -> dict:
     """Key-posture source per key method, each built by its registered builder: classnn
     and snap fitted on the train split (every 2nd frame: enough, and half the fitting
     time); the UPM and SOM of the study (trained on the train split once, then cached:
-    upm.map_cache); feasible: the UPM with the humanoid's checks."""
+    upm.maps.map_cache); feasible: the UPM with the humanoid's checks."""
     from upm.transitions import METHODS, KeySourceContext, build_key_source
 
     context = KeySourceContext(catalog=catalog_of(data_dir), train_maps=True, train_step=2)

@@ -6,7 +6,7 @@ Every subcommand lives in its own module, named in :data:`COMMANDS`, with
 - ``configure(parser)``: adds its arguments (no heavy imports at module level);
 - ``run(args) -> int``: does the work, importing MuJoCo and friends only here.
 
-Bad input (an :class:`~upm.errors.UpmError`, a bad argument, an unwritable output)
+Bad input (an :class:`~upm.core.errors.UpmError`, a bad argument, an unwritable output)
 prints one line on stderr and exits 2.
 """
 
@@ -18,7 +18,7 @@ import importlib
 import sys
 import warnings
 
-from upm.errors import UpmError
+from upm.core.errors import UpmError
 
 #: Subcommand name -> module implementing it, in the order ``upm --help`` lists them.
 COMMANDS: dict[str, str] = {

@@ -116,7 +116,7 @@ def clip_on_humanoid(context: BenchContext, clip: str, quick_frames: int):
     model : mujoco.MjModel
     """
     from humanoid_xml import catalog_model_path, load_model
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(context.data_dir)
     clip = clip if clip in catalog else catalog.names()[0]

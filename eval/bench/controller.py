@@ -1,9 +1,9 @@
 """The physical checks' speed, each against raw MuJoCo on the same model in the same run:
 
-- kinematic checks (:func:`controller.validity.check_motion`: limits, self-collision,
+- kinematic checks (:func:`controller.checks.validity.check_motion`: limits, self-collision,
   floor, per frame) against a bare loop of ``mj_kinematics`` + ``mj_collision`` over the
   same states;
-- the inverse-dynamics residual (:func:`controller.dynamics.root_residual`: filter,
+- the inverse-dynamics residual (:func:`controller.checks.dynamics.root_residual`: filter,
   finite differences, ``mj_inverse``, floor support by NNLS) against a bare loop of
   ``mj_inverse`` over the same states;
 - tracking (:func:`controller.tracking.track`, both modes) in physics steps per second
@@ -33,9 +33,9 @@ def run(context: BenchContext) -> dict:
     import mujoco
 
     from controller import to_qpos
-    from controller.dynamics import root_residual
-    from controller.tracking import plan_tracking, track
-    from controller.validity import check_motion
+    from controller.checks.dynamics import root_residual
+    from controller.checks.validity import check_motion
+    from controller.tracking.servo import plan_tracking, track
 
     motion, model = clip_on_humanoid(context, "02_01", quick_frames=120)
     clip = motion.name
@@ -102,8 +102,8 @@ def run(context: BenchContext) -> dict:
         hard, hard_model = clip_on_humanoid(context, "16_15", quick_frames=120)
         out.update(_balance(hard_model, to_qpos(hard_model, hard), hard.fps, repeat=1,
                             prefix="balance_16_15_"))
-        from controller.validity import calibrate
-        from upm.catalog import Catalog
+        from controller.checks.validity import calibrate
+        from upm.motion.catalog import Catalog
 
         start = time.perf_counter()
         calibration = calibrate(Catalog(context.data_dir))
@@ -123,8 +123,8 @@ def _balance(model, qpos, fps: float, repeat: int, prefix: str = "balance_") -> 
     after the runs, gives ``reference_mj_step_..._per_s`` and ``ratio_to_raw``."""
     import mujoco
 
-    from controller.balance import follow
-    from controller.balance_control import torque_model
+    from controller.balance.control import torque_model
+    from controller.balance.follow import follow
 
     run = min((follow(model, qpos, fps) for _ in range(repeat)), key=lambda r: r.wall_s)
     two = min((follow(model, qpos, fps, processes=2) for _ in range(repeat)),

@@ -1,7 +1,7 @@
 """The humanoid's kinematic checks: poses per second of ``mj_kinematics`` +
 ``mj_collision`` (what the self-collision and floor checks run per frame), next to
 ``mj_kinematics`` alone and ``mj_step`` measured in the same run on the same model, and
-the whole batched contact query (:func:`controller.contacts.contacts_over_frames`, with
+the whole batched contact query (:func:`controller.checks.contacts.contacts_over_frames`, with
 its Python loop) per frame."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ def run(context: BenchContext) -> dict:
     import mujoco
 
     from controller import to_qpos
-    from controller.contacts import contacts_over_frames
+    from controller.checks.contacts import contacts_over_frames
     from humanoid_xml import build_mjcf
 
     motion, model = clip_on_humanoid(context, "02_07", quick_frames=200)

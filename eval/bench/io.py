@@ -10,8 +10,8 @@ NAME = "io"
 
 
 def run(context: BenchContext) -> dict:
-    from upm.catalog import Catalog, _read_asf_cached
-    from upm.kinematics import forward_kinematics
+    from upm.motion.catalog import Catalog, _read_asf_cached
+    from upm.motion.kinematics import forward_kinematics
 
     catalog = Catalog(context.data_dir)
     names = catalog.names()

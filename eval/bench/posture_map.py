@@ -26,8 +26,8 @@ REFERENCE_SINGLE_US, REFERENCE_BATCHED_US, REFERENCE_TRAIN_S = 67.0, 15.0, 12.1
 
 def _busier_of_two(cpu_s: dict[str, float]) -> float:
     """The larger total of two workers that each take the next class (in the order of
-    :data:`upm.upm_training.SLOWEST_FIRST`) as soon as they are free."""
-    from upm.upm_training import SLOWEST_FIRST
+    :data:`upm.maps.upm_training.SLOWEST_FIRST`) as soon as they are free."""
+    from upm.maps.upm_training import SLOWEST_FIRST
 
     rank = {name: i for i, name in enumerate(SLOWEST_FIRST)}
     busy = [0.0, 0.0]
@@ -39,11 +39,11 @@ def _busier_of_two(cpu_s: dict[str, float]) -> float:
 def run(context: BenchContext) -> dict:
     from scipy.spatial import cKDTree
 
-    from upm.catalog import Catalog
-    from upm.class_maps import postures_of_clips
-    from upm.posture_map import UniformPostureMap
-    from upm.skeleton import CLASS_NAMES, CLASS_SLICES
-    from upm.som import KohonenSOM
+    from upm.maps.class_maps import postures_of_clips
+    from upm.maps.posture_map import UniformPostureMap
+    from upm.maps.som import KohonenSOM
+    from upm.motion.catalog import Catalog
+    from upm.motion.skeleton import CLASS_NAMES, CLASS_SLICES
 
     catalog = Catalog(context.data_dir)
     names = catalog.names("train")

@@ -42,7 +42,7 @@ def run(context: BenchContext) -> dict:
         return {"skipped": "viser is not installed (pip install 'upm-controller[studio]')"}
     from studio.app import Studio
     from studio.session import Session
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
     from upm.transitions import KeySourceContext, build_key_source
 
     catalog = Catalog(context.data_dir)

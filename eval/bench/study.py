@@ -20,8 +20,8 @@ def run(context: BenchContext) -> dict:
     from eval.pairs import draw_pairs
     from eval.realdata import RealPostures, load_test_clips
     from humanoid_xml import catalog_model_path, load_model
-    from upm.catalog import Catalog
-    from upm.map_cache import trained_map
+    from upm.maps.map_cache import trained_map
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(context.data_dir)
     motions = load_test_clips(catalog)
@@ -52,10 +52,10 @@ def run(context: BenchContext) -> dict:
 
 def _time_pair(pair, motions, lengths, real, upm, model, repeat: int) -> dict[str, float]:
     """Milliseconds of each part of scoring one pair's UPM window, and of making it."""
-    from controller.dynamics import root_residual
+    from controller.checks.dynamics import root_residual
+    from controller.checks.validity import check_motion
     from controller.qpos import to_qpos
-    from controller.tracking import track
-    from controller.validity import check_motion
+    from controller.tracking.servo import track
     from eval.metrics import window_jerk_rms
     from eval.pairs import exclusion_zones
     from eval.scoring import RESIDUAL_CONTEXT, feet_over_frames, score_window

@@ -7,7 +7,7 @@ interleaved with each method (alternating rounds, medians), is one scipy
 ``make_interp_spline`` cubic fit and evaluation over the same 7 x 63 key frames: a fixed
 piece of library work of the size of a window, which the methods themselves no longer
 do (the project's spline is a cached weight matrix). Key-posture sources: the UPM and the
-SOM trained on the train split (:func:`upm.map_cache.trained_map`: trained once, then
+SOM trained on the train split (:func:`upm.maps.map_cache.trained_map`: trained once, then
 cached; training time is not part of the figure), ``classnn`` and ``snap`` fitted on the
 same postures, each built by its method's registered builder (``feasible``: the UPM with
 the humanoid's kinematic checks, whose models are built at the first transition of a
@@ -33,7 +33,7 @@ REFERENCE_AT_TARGETS_US = 60.0
 
 
 def run(context: BenchContext) -> dict:
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
     from upm.transitions import (
         METHODS,
         KeySourceContext,

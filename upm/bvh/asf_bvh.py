@@ -22,14 +22,14 @@ import numpy as np
 
 from upm.bvh.kinematics import local_rotations
 from upm.bvh.reader import BvhMotion, BvhSkeleton
-from upm.errors import DataFileError
-from upm.kinematics import global_transforms
-from upm.rotations import (
+from upm.core.errors import DataFileError
+from upm.motion.kinematics import global_transforms
+from upm.motion.skeleton import JOINTS
+from upm.ops.rotations import (
     _alternate_euler,
     continuous_euler_deg,
     matrix_to_euler_deg,
 )
-from upm.skeleton import JOINTS
 
 #: Centimetres per metre: the unit written.
 CM_PER_M = 100.0
@@ -93,7 +93,7 @@ def motion_from_bvh(bvh: BvhMotion, skeleton, fps: float | None = None, name: st
     DataFileError
         If the BVH's joints are not the ASF's bones (another skeleton: not retargeted).
     """
-    from upm.motion import Motion
+    from upm.motion.motion import Motion
 
     if tuple(bvh.skeleton.names) != tuple(skeleton.bone_names):
         missing = [b for b in skeleton.bone_names if b not in bvh.skeleton.names]

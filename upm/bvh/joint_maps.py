@@ -24,8 +24,8 @@ import json
 import os
 from dataclasses import dataclass
 
-from upm.errors import DataFileError
-from upm.skeleton import JOINTS
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS
 
 #: The second element of a bone entry that names the first joint's end site.
 END_SITE = "End Site"

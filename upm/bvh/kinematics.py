@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.rotations import axis_rotation
+from upm.ops.rotations import axis_rotation
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
 

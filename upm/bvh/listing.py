@@ -51,7 +51,7 @@ def bvh_row(path: Path, clip_names, root: Path) -> dict:
     from upm.bvh.reader import read_bvh
     from upm.bvh.retarget import added_tpose
     from upm.bvh.world_retarget import added_rest_frame
-    from upm.errors import UpmError
+    from upm.core.errors import UpmError
 
     try:
         shown = str(path.relative_to(root.parent.resolve()))

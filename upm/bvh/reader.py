@@ -2,7 +2,7 @@
 
 Any hierarchy depth (bounded by :data:`MAX_DEPTH`), any channel order and count per joint,
 ``End Site`` blocks, CRLF/LF line endings mixed in one file, tabs or spaces (also after
-``Frames:``). Every problem is a :class:`~upm.errors.DataFileError` naming the file and
+``Frames:``). Every problem is a :class:`~upm.core.errors.DataFileError` naming the file and
 line.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from upm.errors import DataFileError
+from upm.core.errors import DataFileError
 
 #: Bounds on what a BVH may hold.
 MAX_BVH_BYTES = 2 * 1024 ** 3
@@ -99,7 +99,7 @@ def read_bvh(path: str | os.PathLike) -> BvhMotion:
     DataFileError
         Missing, unreadable, too large, malformed or out-of-range content (file and line).
     """
-    from upm.textfile import read_text_lines
+    from upm.core.textfile import read_text_lines
 
     try:
         size = os.path.getsize(path)

@@ -20,9 +20,9 @@ import numpy as np
 
 from upm.bvh.asf_bvh import _joint_angles
 from upm.bvh.kinematics import local_rotations
-from upm.errors import DataFileError
-from upm.rotations import continuous_euler_deg, matrix_to_euler_deg
-from upm.skeleton import JOINTS
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS
+from upm.ops.rotations import continuous_euler_deg, matrix_to_euler_deg
 
 #: The CMU 31-joint BVH naming (cgspeed's conversions) -> ASF bone.
 CMU_31 = {
@@ -59,7 +59,7 @@ def retarget_cmu(bvh, skeleton, fps: float | None = None, drop_tpose: bool | Non
     Parameters
     ----------
     bvh : upm.bvh.BvhMotion
-    skeleton : upm.skeleton.Skeleton
+    skeleton : upm.motion.skeleton.Skeleton
     fps : float, optional
         The take's rate (default the BVH's ``Frame Time``; subject 141's conversions say
         120 fps for 60 fps takes: give the catalogue's rate).
@@ -72,7 +72,7 @@ def retarget_cmu(bvh, skeleton, fps: float | None = None, drop_tpose: bool | Non
         If joints of :data:`CMU_31` needed by the 21-joint posture are missing, or the
         hierarchy differs from the ASF's.
     """
-    from upm.motion import Motion
+    from upm.motion.motion import Motion
 
     sk = bvh.skeleton
     index = {n: j for j, n in enumerate(sk.names)}

@@ -35,9 +35,9 @@ import numpy as np
 
 from upm.bvh.joint_maps import END_SITE, JointMap, check_map_against
 from upm.bvh.kinematics import rest_positions, world_transforms
-from upm.errors import DataFileError
-from upm.rotations import continuous_euler_deg, euler_to_matrix, matrix_to_euler_deg
-from upm.skeleton import JOINTS
+from upm.core.errors import DataFileError
+from upm.motion.skeleton import JOINTS
+from upm.ops.rotations import continuous_euler_deg, euler_to_matrix, matrix_to_euler_deg
 
 #: Weight of the twist term against the direction term (see the module docstring).
 TWIST_WEIGHT = 0.1
@@ -87,7 +87,7 @@ def retarget_world(bvh, skeleton, joint_map: JointMap, fps: float | None = None,
     Parameters
     ----------
     bvh : upm.bvh.BvhMotion
-    skeleton : upm.skeleton.Skeleton
+    skeleton : upm.motion.skeleton.Skeleton
     joint_map : JointMap
     fps : float, optional
         The take's rate (default the file's ``Frame Time``).
@@ -104,7 +104,7 @@ def retarget_world(bvh, skeleton, joint_map: JointMap, fps: float | None = None,
     DataFileError
         If the map names joints the BVH lacks, or a mapped segment has zero length.
     """
-    from upm.motion import Motion
+    from upm.motion.motion import Motion
 
     check_map_against(joint_map, bvh)
     drop = added_rest_frame(bvh, joint_map) if drop_first is None else bool(drop_first)
@@ -259,7 +259,7 @@ def _solve_joint(parent, c, u, target, declared, hinges) -> np.ndarray:
 def _root_position_m(bvh, skeleton, joint_map, index, pos, rest_pos, rest_ends,
                      root_rotation) -> np.ndarray:
     """Root translation (T, 3) m: the ASF's hip centre on the BVH's, scaled by legs."""
-    from upm.kinematics import rest_positions as asf_rest
+    from upm.motion.kinematics import rest_positions as asf_rest
 
     asf_ends = asf_rest(skeleton)
     hips, legs_bvh, legs_asf, centre_asf = [], [], [], []

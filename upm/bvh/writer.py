@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 
-from upm.fileio import atomic_open
+from upm.core.fileio import atomic_open
 
 
 def write_bvh(path: str | os.PathLike, bvh, precision: int = 9) -> None:

@@ -31,11 +31,11 @@ def run(args) -> int:
     from threadpoolctl import threadpool_info, threadpool_limits
 
     from eval.bench import BenchContext, discover
-    from upm.catalog import Catalog
     from upm.commands.common import print_json
-    from upm.errors import UsageError
-    from upm.fileio import atomic_write_text
-    from upm.progress import progress
+    from upm.core.errors import UsageError
+    from upm.core.fileio import atomic_write_text
+    from upm.core.progress import progress
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(args.data)
     modules = discover()

@@ -47,7 +47,7 @@ def _motions(args):
     from pathlib import Path
 
     from humanoid_xml import catalog_model_path, subject_model_path
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if args.split and args.motions:
         raise UsageError("give motions or --split, not both")
@@ -64,8 +64,8 @@ def _motions(args):
                 raise UsageError(f"{path}: no such file")
         if args.fps is not None and not args.fps > 0:
             raise UsageError(f"--fps must be positive, not {args.fps:g}")
-        from upm.amc import read_amc
-        from upm.asf import read_asf
+        from upm.motion.amc import read_amc
+        from upm.motion.asf import read_asf
 
         skeleton = read_asf(args.asf)
         motion = read_amc(amc[0], skeleton, fps=args.fps or 120.0,
@@ -77,7 +77,7 @@ def _motions(args):
                              "(with --asf SKEL.asf) or a clip such as 02_01")
     if args.asf or args.fps:
         raise UsageError("--asf and --fps go with an AMC file, not with clips")
-    from upm.catalog import Catalog, parse_clip_ref
+    from upm.motion.catalog import Catalog, parse_clip_ref
 
     catalog = Catalog(args.data)
     if args.split:
@@ -98,7 +98,7 @@ def run(args) -> int:
     from controller.analysis import analyse
     from controller.report import write_report
     from humanoid_xml import load_model
-    from upm.progress import progress
+    from upm.core.progress import progress
 
     items = _motions(args)
     models = {}
@@ -178,7 +178,7 @@ def _write_calibration(calibration: dict, path) -> None:
     from pathlib import Path
 
     from controller.report import csv_text
-    from upm.fileio import atomic_write_text
+    from upm.core.fileio import atomic_write_text
 
     path = Path(path)
     atomic_write_text(path, json.dumps(calibration, indent=1) + "\n")

@@ -30,8 +30,8 @@ def configure(parser) -> None:
 
 def clip_rows(catalog, names) -> list[dict]:
     """One row per clip: the catalogue fields and the out-of-limit shares."""
-    from upm.limits import outside_share
-    from upm.progress import progress
+    from upm.core.progress import progress
+    from upm.motion.limits import outside_share
 
     rows = []
     for name in progress(names, desc="reading clips", unit="clip"):
@@ -66,7 +66,7 @@ def bvh_rows(catalog) -> list[dict]:
 
 
 def run(args) -> int:
-    from upm.catalog import Catalog
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(args.data)
     rows = clip_rows(catalog, catalog.names(args.split))

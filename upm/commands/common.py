@@ -7,7 +7,7 @@ import sys
 
 
 def add_data_argument(parser) -> None:
-    """``--data DIR``: the clips' directory (:func:`upm.catalog.default_data_dir`)."""
+    """``--data DIR``: the clips' directory (:func:`upm.motion.catalog.default_data_dir`)."""
     parser.add_argument(
         "--data", metavar="DIR", default=None,
         help="directory of CMU clips (NN/NN.asf, NN/NN_MM.amc, clips.csv); "
@@ -30,10 +30,10 @@ def add_strength_argument(parser) -> None:
 
 
 def check_strength(value: float) -> float:
-    """``value`` if it is a usable ``--strength``, else a :class:`upm.errors.UsageError`."""
+    """``value`` if it is a usable ``--strength``, else a :class:`upm.core.errors.UsageError`."""
     import math
 
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if not (math.isfinite(value) and 0 < value <= MAX_STRENGTH):
         raise UsageError(f"--strength {value:g}: use a number above 0 and at most "

@@ -76,8 +76,8 @@ def configure(parser) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from upm.errors import UsageError
-    from upm.motion_io import check_motion_path, write_motion
+    from upm.bvh.formats import check_motion_path, write_motion
+    from upm.core.errors import UsageError
 
     check_motion_path(args.out, "OUT")
     if args.fps is not None and not 0 < args.fps <= 10000:
@@ -107,8 +107,8 @@ def run(args) -> int:
     elif suffix == ".amc":
         if not args.skeleton:
             raise UsageError(f"{source}: an AMC file needs its skeleton: --skeleton ASF")
-        from upm.amc import read_amc
-        from upm.asf import read_asf
+        from upm.motion.amc import read_amc
+        from upm.motion.asf import read_asf
 
         motion = read_amc(source, read_asf(args.skeleton), fps=args.fps or 120.0,
                           name=source.stem)
@@ -117,12 +117,12 @@ def run(args) -> int:
     else:
         if args.skeleton:
             raise UsageError("--skeleton goes with an .amc or .bvh input, not a clip")
-        from upm.catalog import Catalog, parse_clip_ref
+        from upm.motion.catalog import Catalog, parse_clip_ref
 
         catalog = Catalog(args.data)
         motion = catalog.load_ref(parse_clip_ref(args.source))
         if args.fps:
-            from upm.resample import resample
+            from upm.motion.resample import resample
 
             motion = resample(motion, args.fps)
     write_motion(args.out, motion)
@@ -140,7 +140,7 @@ def _motion_of_bvh(args, bvh, source):
 
     clip = _clip_named(args.data, source.stem)
     if args.skeleton:
-        from upm.asf import read_asf
+        from upm.motion.asf import read_asf
 
         skeleton = read_asf(args.skeleton)
     elif clip is not None:
@@ -171,8 +171,8 @@ def _clip_named(data, stem: str):
     """``(catalog, clip info)`` of the clip a BVH file is named after: its stem is the
     clip's name, or starts with it followed by ``_`` or ``-`` (the longest such name);
     None when there is no such clip or no readable data directory."""
-    from upm.catalog import Catalog
-    from upm.errors import UpmError
+    from upm.core.errors import UpmError
+    from upm.motion.catalog import Catalog
 
     try:
         catalog = Catalog(data)

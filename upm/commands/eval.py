@@ -104,7 +104,7 @@ def configure(parser) -> None:
 
 def parse_windows(text: str | None, default) -> tuple[int, ...]:
     """``"10,20,40"`` -> (10, 20, 40): whole numbers >= 2, no repeats."""
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if text is None:
         return tuple(default)
@@ -127,8 +127,8 @@ def run(args) -> int:
     from eval.outputs import figure_window, write_outputs
     from eval.study import STUDY_METHODS, StudyConfig, run_study
     from eval.tables import headline_text
-    from upm.catalog import Catalog
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
+    from upm.motion.catalog import Catalog
     from upm.transitions import get_method
 
     pairs = args.pairs if args.pairs is not None else (FULL_PAIRS if args.full
@@ -167,7 +167,7 @@ def run(args) -> int:
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
           f"{','.join(map(str, windows))}, seed {args.seed}", file=sys.stderr)
     from eval.executor import executor_session
-    from eval.study import default_workers
+    from eval.runs import default_workers
 
     with executor_session(args.executor, args.workers or default_workers(), args.address):
         result = run_study(config, workers=args.workers, executor=args.executor,

@@ -17,10 +17,10 @@ def configure(parser) -> None:
 def run(args) -> int:
     import os
 
-    from upm.class_maps import FORMAT_VERSION
     from upm.commands.common import print_json
     from upm.commands.train import print_summary, summary_rows
-    from upm.posture_map import load_map
+    from upm.maps.class_maps import FORMAT_VERSION
+    from upm.maps.map_file import load_map
 
     posture_map = load_map(args.map)
     prov = posture_map.provenance

@@ -43,8 +43,8 @@ def run(args) -> int:
     import numpy as np
 
     import humanoid_xml
-    from upm.errors import UsageError
-    from upm.fileio import atomic_write_text
+    from upm.core.errors import UsageError
+    from upm.core.fileio import atomic_write_text
 
     if args.generic:
         # Rebuilt from the description the project owns (identical to the packaged file,
@@ -57,7 +57,7 @@ def run(args) -> int:
         source = humanoid_xml.subject_model_path(args.asf)
         text = source.read_text(encoding="utf-8")
     else:
-        from upm.catalog import Catalog
+        from upm.motion.catalog import Catalog
 
         source = humanoid_xml.catalog_model_path(Catalog(args.data), args.subject)
         text = source.read_text(encoding="utf-8")

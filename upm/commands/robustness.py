@@ -53,7 +53,7 @@ def configure(parser) -> None:
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="UPM for the rows joined by upm or feasible (default: trained on "
                              "the train split, cached)")
-    from controller.balance_search import SEARCH_BUDGET
+    from controller.balance.search import SEARCH_BUDGET
 
     parser.add_argument("--search-budget", metavar="X", type=float, default=None,
                         help="the balance controller's search budget, in multiples of the "
@@ -82,20 +82,12 @@ def run(args) -> int:
     import sys
     from pathlib import Path
 
-    from eval.robustness import (
-        CHECKPOINT_NAME,
-        DEFAULT_ROWS,
-        Settings,
-        parse_rows,
-        plot,
-        run_robustness,
-        summary,
-        table_markdown,
-    )
-    from upm.catalog import Catalog
+    from eval.robustness import CHECKPOINT_NAME, DEFAULT_ROWS, Settings, parse_rows, run_robustness
+    from eval.robustness_report import plot, summary, table_markdown
     from upm.commands.common import check_strength
-    from upm.errors import UsageError
-    from upm.fileio import atomic_path
+    from upm.core.errors import UsageError
+    from upm.core.fileio import atomic_path
+    from upm.motion.catalog import Catalog
 
     if not 0 <= args.seeds <= 1000:
         raise UsageError(f"--seeds must be from 0 to 1000, not {args.seeds}")
@@ -131,7 +123,7 @@ def run(args) -> int:
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
           f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
     from eval.executor import executor_session
-    from eval.study import default_workers
+    from eval.runs import default_workers
 
     with executor_session(args.executor, args.workers or default_workers(), args.address):
         result = run_robustness(settings, rows, args.seeds, out, executor=args.executor,

@@ -41,10 +41,10 @@ def configure(parser) -> None:
 def run(args) -> int:
     import json
 
+    from upm.bvh.formats import check_motion_path, write_motion
     from upm.commands.transition import sequence_from_args
-    from upm.errors import UsageError
-    from upm.fileio import atomic_write_text
-    from upm.motion_io import check_motion_path, write_motion
+    from upm.core.errors import UsageError
+    from upm.core.fileio import atomic_write_text
 
     check_motion_path(args.out)
 

@@ -24,7 +24,7 @@ summary beside it. --video renders offscreen (no GPU needed: OSMesa) an .mp4, a 
 a .png filmstrip of the whole sequence; --amc writes what the free-root character
 actually did as an AMC on the subject's skeleton, --control the torques the balance
 controller applied at every physics step (.npz: replayable open-loop with
-controller.balance_run.replay); --filmstrip a PNG of the frames around each
+controller.balance.run.replay); --filmstrip a PNG of the frames around each
 window; --viewer plays it in MuJoCo's viewer where there is a display.
 
 A free-root run is one path of a chaotic system: whether it falls can turn on differences
@@ -118,7 +118,7 @@ def _default_processes() -> int:
 
 
 def _default_budget() -> float:
-    from controller.balance_search import SEARCH_BUDGET
+    from controller.balance.search import SEARCH_BUDGET
 
     return SEARCH_BUDGET
 
@@ -140,7 +140,7 @@ def run(args) -> int:
     from humanoid_xml import catalog_model_path, load_model
     from upm.commands.common import check_strength
     from upm.commands.transition import sequence_from_args
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     strength = check_strength(args.strength)
     if (args.amc or args.control) and "free" not in args.modes:
@@ -159,7 +159,7 @@ def run(args) -> int:
         raise UsageError(f"--offset-deg {args.offset_deg:g}: use a number of degrees from 0 "
                          "to 10")
     if args.amc:
-        from upm.motion_io import check_motion_path
+        from upm.bvh.formats import check_motion_path
 
         check_motion_path(args.amc, "--amc")
     if args.control and not args.control.lower().endswith(".npz"):
@@ -178,7 +178,7 @@ def run(args) -> int:
     catalog, refs, sequence = sequence_from_args(args, args.sequence)
     motion = sequence.motion
     if args.offset_deg > 0:
-        from upm.perturb import offset_joint_angles
+        from upm.motion.perturb import offset_joint_angles
 
         motion = offset_joint_angles(motion, args.offset_deg, args.offset_seed)
         print(f"joint angles moved by N(0, {args.offset_deg:g} deg) per channel, seed "
@@ -243,7 +243,7 @@ def _write_simulated_amc(model, qpos, motion, path):
     import numpy as np
 
     from controller.qpos import from_qpos
-    from upm.motion_io import write_motion
+    from upm.bvh.formats import write_motion
 
     simulated = qpos[np.isfinite(qpos).all(axis=1)]
     write_motion(path, from_qpos(model, simulated, motion.skeleton, motion.fps,
@@ -252,10 +252,10 @@ def _write_simulated_amc(model, qpos, motion, path):
 
 
 def _write_control(run, path):
-    """The balance run's control and start state, for controller.balance_run.replay."""
+    """The balance run's control and start state, for controller.balance.run.replay."""
     import numpy as np
 
-    from upm.fileio import atomic_path
+    from upm.core.fileio import atomic_path
 
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez(handle, ctrl=run.ctrl, start_qpos=run.start_qpos,

@@ -31,8 +31,8 @@ def configure(parser) -> None:
 
 
 def run(args) -> int:
-    from upm.catalog import Catalog
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
+    from upm.motion.catalog import Catalog
 
     try:
         import viser  # noqa: F401

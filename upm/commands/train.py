@@ -56,7 +56,7 @@ def configure(parser) -> None:
 
 
 def _grid(text):
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     if text is None:
         return None
@@ -100,10 +100,10 @@ def print_summary(posture_map, header: str) -> None:
 def run(args) -> int:
     import os
 
-    from upm.catalog import Catalog
-    from upm.class_maps import postures_of_clips
     from upm.commands.common import print_json
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
+    from upm.maps.class_maps import postures_of_clips
+    from upm.motion.catalog import Catalog
 
     catalog = Catalog(args.data)
     if args.clips:
@@ -116,14 +116,14 @@ def run(args) -> int:
                              f"(is clips.csv there?)")
     postures, names = postures_of_clips(catalog, names)
     if args.kind == "upm":
-        from upm.posture_map import UniformPostureMap
+        from upm.maps.posture_map import UniformPostureMap
 
         posture_map = UniformPostureMap(
             radius_deg=args.radius, neighbourhood_deg=args.neighbourhood,
             learning_rate=args.learning_rate, passes=args.passes, batch_size=args.batch_size,
             seed=args.seed, progress=True)
     else:
-        from upm.som import KohonenSOM
+        from upm.maps.som import KohonenSOM
 
         posture_map = KohonenSOM(grid=_grid(args.grid), epochs=args.epochs, seed=args.seed,
                                  progress=True)

@@ -60,14 +60,14 @@ def sequence_from_args(args, pieces_text: list[str]):
 
     Returns
     -------
-    catalog : upm.catalog.Catalog
-    refs : list of upm.catalog.ClipRef
+    catalog : upm.motion.catalog.Catalog
+    refs : list of upm.motion.catalog.ClipRef
     sequence : upm.transitions.Sequence
     """
     import warnings
 
-    from upm.catalog import Catalog, parse_clip_ref
-    from upm.progress import progress
+    from upm.core.progress import progress
+    from upm.motion.catalog import Catalog, parse_clip_ref
     from upm.transitions import build_sequence
     from upm.transitions.load import key_source_for
     from upm.transitions.registry import get_method
@@ -93,8 +93,8 @@ def sequence_from_args(args, pieces_text: list[str]):
 
 def _matched(pieces, refs, starts):
     """The pieces cut where the next one's gait phase matches, and their references."""
-    from upm.catalog import ClipRef
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
+    from upm.motion.catalog import ClipRef
     from upm.transitions.cuts import matched_pieces
 
     short = [str(ref) for ref, piece in zip(refs, pieces, strict=True) if piece.n_frames < 2]
@@ -136,8 +136,8 @@ def configure(parser) -> None:
 
 
 def _single_frame(text: str, option: str):
-    from upm.catalog import parse_clip_ref
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
+    from upm.motion.catalog import parse_clip_ref
 
     ref = parse_clip_ref(text)
     if ref.has_range:
@@ -147,7 +147,7 @@ def _single_frame(text: str, option: str):
 
 def _clip_window(catalog, ref, role: str, context: int | None):
     """Clip 1 up to its frame (role "from") or clip 2 from its frame (role "to")."""
-    from upm.errors import UsageError
+    from upm.core.errors import UsageError
 
     motion = catalog.load(ref.name)
     n = motion.n_frames
@@ -167,7 +167,7 @@ def _clip_window(catalog, ref, role: str, context: int | None):
 
 def window_report(result, fps: float) -> dict:
     """The JSON description of a transition's window."""
-    from upm.skeleton import POSTURE_DOF_NAMES
+    from upm.motion.skeleton import POSTURE_DOF_NAMES
 
     key = result.key_posture_deg
     return {
@@ -192,10 +192,10 @@ def window_report(result, fps: float) -> dict:
 def run(args) -> int:
     import json
 
-    from upm.catalog import Catalog
-    from upm.errors import UsageError
-    from upm.fileio import atomic_write_text
-    from upm.motion_io import check_motion_path, write_motion
+    from upm.bvh.formats import check_motion_path, write_motion
+    from upm.core.errors import UsageError
+    from upm.core.fileio import atomic_write_text
+    from upm.motion.catalog import Catalog
     from upm.transitions import transition
     from upm.transitions.load import key_source_for
 
@@ -204,7 +204,7 @@ def run(args) -> int:
     if args.context is not None and args.context < 2:
         raise UsageError(f"--context must be at least 2 frames, not {args.context}")
     if args.plot_dof is not None:
-        from upm.skeleton import POSTURE_DOF_NAMES
+        from upm.motion.skeleton import POSTURE_DOF_NAMES
 
         if args.plot_dof not in POSTURE_DOF_NAMES:
             raise UsageError(f"--plot-dof {args.plot_dof}: not a posture DOF (JOINT.rx/ry/rz, "
@@ -225,7 +225,7 @@ def run(args) -> int:
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     if args.plot:
-        from upm.dof_plot import plot_window_dof
+        from upm.transitions.dof_plot import plot_window_dof
 
         linear = result if args.method == "linear" else transition(
             "linear", before, after, args.frames, args.alpha, align_heading=args.align_heading)

@@ -16,9 +16,9 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from upm.errors import UsageError
-from upm.motion import Motion
-from upm.skeleton import Skeleton
+from upm.core.errors import UsageError
+from upm.motion.motion import Motion
+from upm.motion.skeleton import Skeleton
 
 
 @runtime_checkable
@@ -141,6 +141,10 @@ class WindowResult:
     diagnostics: Mapping[str, float] = field(default_factory=dict)
 
 
+#: The roles a method can play in the study (see :class:`TransitionMethod`), in table order.
+ROLES = ("recommended", "paper", "paper-comparison", "baseline", "ablation")
+
+
 @dataclass(frozen=True)
 class TransitionMethod:
     """A named transition method.
@@ -162,12 +166,18 @@ class TransitionMethod:
     key_source : callable or str or None
         How the method's key source is built, for key-posture methods:
         ``build(context: upm.transitions.registry.KeySourceContext) -> KeyPostureSource``,
-        or the same named lazily as ``"package.module:function"`` (imported on first
-        use: a builder that needs heavy packages, e.g. the humanoid's kinematic checks,
-        costs nothing until the method is used).
+        (its imports inside the builder, so that a method costs nothing until it is used).
     key_help : str
-        What the key source is, for the error raised when it is missing; starts with
-        "a trained" when it is a trained map (the ``--map`` error lists the others).
+        What the key source is, for the error raised when it is missing.
+    role : str
+        What the method is in the study (one of :data:`ROLES`): ``"paper"`` (the paper's
+        method), ``"paper-comparison"`` (what the paper compares it with), ``"recommended"``
+        (the method the project recommends), ``"baseline"`` (another standard method) or
+        ``"ablation"`` (a part of a method taken away). Tables, figures and the studio
+        read it.
+    needs_map : bool
+        Whether the key source is a trained posture map (``--map``; the study trains
+        it), rather than nothing or something fitted on the data at once.
     """
 
     name: str
@@ -175,8 +185,15 @@ class TransitionMethod:
     continuity: str
     key_kind: str | None
     summary: str
-    key_source: Callable | str | None = None
+    key_source: Callable | None = None
     key_help: str = ""
+    role: str = "baseline"
+    needs_map: bool = False
+
+    def __post_init__(self):
+        if self.role not in ROLES:
+            raise UsageError(f"method {self.name!r}: role {self.role!r} is not one of "
+                             f"{', '.join(ROLES)}")
 
     @property
     def needs_key_source(self) -> bool:
@@ -211,7 +228,7 @@ class Transition:
         The method's own figures plus ``root_scale`` (clip 2's root translation scale
         when it comes from another subject), ``resampled_from_fps`` (0 if not) and
         ``dropouts_filled`` (the (joint, frame) marker dropouts of both clips filled
-        before the window was made, :func:`upm.dropouts.fill_dropouts`).
+        before the window was made, :func:`upm.motion.dropouts.fill_dropouts`).
     """
 
     motion: Motion

@@ -19,8 +19,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from upm.kinematics import global_transforms
-from upm.motion import Motion
+from upm.motion.kinematics import global_transforms
+from upm.motion.motion import Motion
 
 #: The end of each clip is chosen within its last this many seconds (a stride and a bit
 #: of a walk: every phase is within reach).

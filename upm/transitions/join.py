@@ -6,8 +6,8 @@ comparisons between methods are about the postures. Angles: the methods work on 
 unwrapped along time (clip 2 shifted by whole turns so that B lies within 180 degrees of
 A); the window's joint angles are then wrapped to [-180, 180), like the paper's DOF
 values, so the joined motion is continuous *on the circle* (difference frames with
-``upm.angles.angle_diff_deg`` or unwrap first). Clip frames are kept as given, but for
-marker dropouts (:mod:`upm.dropouts`: a bone read as exactly zero for a few frames), which
+``upm.ops.angles.angle_diff_deg`` or unwrap first). Clip frames are kept as given, but for
+marker dropouts (:mod:`upm.motion.dropouts`: a bone read as exactly zero for a few frames), which
 are filled from the frames around them first: 16_15 starts with its left arm at rest for
 2 frames, and B taken from them would swing the arm down through the window and 76 degrees
 back up in the frame after it. The root's Euler angles, in contrast, are written
@@ -20,11 +20,11 @@ import time
 
 import numpy as np
 
-from upm.angles import unwrap_deg, wrap_deg
-from upm.dropouts import fill_dropouts
-from upm.errors import UsageError
-from upm.motion import Motion
-from upm.resample import resample
+from upm.core.errors import UsageError
+from upm.motion.dropouts import fill_dropouts
+from upm.motion.motion import Motion
+from upm.motion.resample import resample
+from upm.ops.angles import unwrap_deg, wrap_deg
 from upm.transitions.base import (
     KeyPostureSource,
     Transition,
@@ -113,7 +113,7 @@ def _concat_extra(parts: list[Motion | np.ndarray | None], lengths: list[int], n
 
 
 def _without_dropouts(motion: Motion) -> tuple[Motion, int]:
-    """``motion`` with its marker dropouts filled (:func:`upm.dropouts.fill_dropouts`), and
+    """``motion`` with its marker dropouts filled (:func:`upm.motion.dropouts.fill_dropouts`), and
     the number of (joint, frame) entries filled."""
     posture, filled = fill_dropouts(motion.posture_deg)
     return (motion.replace(posture_deg=posture) if filled else motion), filled

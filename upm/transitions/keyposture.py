@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.angles import angle_diff_deg, wrap_deg
-from upm.errors import UsageError
+from upm.core.errors import UsageError
+from upm.ops.angles import angle_diff_deg, wrap_deg
 from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
 from upm.transitions.spline import keyframe_spline
 
@@ -54,9 +54,11 @@ def solve(problem: WindowProblem) -> WindowResult:
     })
 
 
-def _method(kind: str, summary: str, build, key_help: str) -> TransitionMethod:
+def _method(kind: str, summary: str, build, key_help: str, role: str,
+            needs_map: bool) -> TransitionMethod:
     return TransitionMethod(name=kind, solve=solve, continuity="C1", key_kind=kind,
-                            summary=summary, key_source=build, key_help=key_help)
+                            summary=summary, key_source=build, key_help=key_help,
+                            role=role, needs_map=needs_map)
 
 
 def _classnn(context):
@@ -74,13 +76,14 @@ def _snap(context):
 UPM = _method("upm", "the paper's method: UPM key posture at the middle, cubic B-spline "
                      "through clip frames and key (needs a trained map)",
               lambda context: context.posture_map("upm"),
-              "a trained Uniform Posture Map (upm train --kind upm)")
+              "a trained Uniform Posture Map (upm train --kind upm)", "paper", True)
 SOM = _method("som", "as upm, with the key posture from a classic fixed-grid SOM (the paper's "
                      "foil; needs a trained SOM)",
-              lambda context: context.posture_map("som"), "a trained SOM (upm train --kind som)")
+              lambda context: context.posture_map("som"), "a trained SOM (upm train --kind som)",
+              "baseline", True)
 CLASSNN = _method("classnn", "as upm, with each class's key sub-posture the nearest training "
                              "sub-posture (ablation: no map learned)", _classnn,
-                  "upm.transitions.ClassNearest.fit(training postures)")
+                  "upm.transitions.ClassNearest.fit(training postures)", "ablation", False)
 SNAP = _method("snap", "as upm, with the key posture the whole-body nearest training posture "
                        "(ablation)", _snap,
-               "upm.transitions.NearestPosture.fit(training postures)")
+               "upm.transitions.NearestPosture.fit(training postures)", "ablation", False)

@@ -18,4 +18,5 @@ def solve(problem: WindowProblem) -> WindowResult:
 METHOD = TransitionMethod(
     name="linear", solve=solve, continuity="C0", key_kind=None,
     summary="per-DOF linear blend from A to B, the short way round (the paper's comparison)",
+    role="paper-comparison",
 )

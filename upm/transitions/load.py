@@ -15,7 +15,7 @@ def key_source_for(method: str, map_path, catalog):
     map_path : path-like or None
         ``--map``: required by the methods whose source is a trained map (``upm``,
         ``som``, ``feasible``).
-    catalog : upm.catalog.Catalog
+    catalog : upm.motion.catalog.Catalog
         ``--data``: ``classnn`` and ``snap`` are fitted on its train split.
 
     Returns

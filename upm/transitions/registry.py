@@ -14,14 +14,12 @@ This module imports the method modules and nothing that imports it back
 
 from __future__ import annotations
 
-import importlib
 import os
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from upm.errors import UsageError
+from upm.core.errors import UsageError
 from upm.transitions import feasible, inertialize, keyposture, linear, slerp, spacetime
 from upm.transitions.base import KeyPostureSource, TransitionMethod
 
@@ -69,9 +67,14 @@ def get_method(name: str) -> TransitionMethod:
 
 
 def map_free_methods() -> list[str]:
-    """Methods that need no ``--map`` (no key source, or one built from the data): by
-    convention a map method's ``key_help`` starts with "a trained"."""
-    return [n for n, m in METHODS.items() if not m.key_help.startswith("a trained")]
+    """Methods that need no ``--map`` (no key source, or one built from the data)."""
+    return [n for n, m in METHODS.items() if not m.needs_map]
+
+
+def methods_with_role(role: str) -> list[str]:
+    """The registered methods of one role (:data:`upm.transitions.base.ROLES`), in
+    registration order."""
+    return [n for n, m in METHODS.items() if m.role == role]
 
 
 @dataclass
@@ -81,13 +84,13 @@ class KeySourceContext:
 
     Attributes
     ----------
-    catalog : upm.catalog.Catalog or None
+    catalog : upm.motion.catalog.Catalog or None
         The data (``--data``): the train split of ``clips.csv``, the subjects.
     map_path : path-like or None
         ``--map``: a saved posture map.
     train_maps : bool
         Without ``map_path``, train the maps on the train split (cached by
-        :func:`upm.map_cache.trained_map`) instead of failing: the study and the bench.
+        :func:`upm.maps.map_cache.trained_map`) instead of failing: the study and the bench.
     progress : bool
         Progress bars while training maps.
     train_step : int
@@ -115,7 +118,7 @@ class KeySourceContext:
         if self.map_path is not None:
             source = self._load_map(kind)
         elif self.train_maps:
-            from upm.map_cache import trained_map
+            from upm.maps.map_cache import trained_map
 
             source = trained_map(self._require_catalog(), kind, progress=self.progress)
         else:
@@ -126,7 +129,7 @@ class KeySourceContext:
         return source
 
     def _load_map(self, kind: str):
-        from upm.class_maps import MAP_KINDS, load_map
+        from upm.maps.map_file import MAP_KINDS, load_map
 
         if kind not in MAP_KINDS:
             raise UsageError(f"no map kind {kind!r} (known: {', '.join(MAP_KINDS)})")
@@ -156,14 +159,6 @@ class KeySourceContext:
         return self.catalog
 
 
-def _builder(method: TransitionMethod) -> Callable:
-    built = method.key_source
-    if isinstance(built, str):
-        module, _, name = built.partition(":")
-        built = getattr(importlib.import_module(module), name)
-    return built
-
-
 def build_key_source(method: str | TransitionMethod, context: KeySourceContext):
     """The key source of a method, built from ``context`` (None for methods without one).
 
@@ -176,7 +171,7 @@ def build_key_source(method: str | TransitionMethod, context: KeySourceContext):
     if not spec.needs_key_source:
         return None
     context.method = spec.name
-    source = _builder(spec)(context)
+    source = spec.key_source(context)
     if not isinstance(source, KeyPostureSource):
         raise UsageError(f"the key-source builder of {spec.name!r} returned a "
                          f"{type(source).__name__}, not a key-posture source")

@@ -35,15 +35,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from upm.angles import wrap_deg
-from upm.rotations import (
+from upm.motion.skeleton import Skeleton
+from upm.ops.angles import wrap_deg
+from upm.ops.rotations import (
     continuous_euler_deg,
     euler_to_matrix,
     matrix_to_quaternion,
     rotation_exp,
     rotation_log,
 )
-from upm.skeleton import Skeleton
 from upm.transitions.spline import SPLINE_CONTEXT, spline_weights
 
 _HORIZONTAL = slice(0, 3, 2)  # tx, tz (a slice: views, not fancy-index copies)
@@ -96,7 +96,7 @@ def leg_length_m(skeleton: Skeleton) -> float:
     CMU captures put the floor near y = 0, with the standing root at about this height
     (0.80-0.97 m over the 12 subjects here).
     """
-    from upm.kinematics import rest_positions
+    from upm.motion.kinematics import rest_positions
 
     return float(-rest_positions(skeleton)[:, 1].min())
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from upm.errors import UsageError
-from upm.motion import Motion
-from upm.resample import resample
+from upm.core.errors import UsageError
+from upm.motion.motion import Motion
+from upm.motion.resample import resample
 from upm.transitions.join import get_method, transition
 from upm.transitions.spline import SPLINE_CONTEXT
 

@@ -33,8 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.angles import angle_diff_deg
-from upm.rotations import (
+from upm.motion.skeleton import N_JOINTS
+from upm.ops.angles import angle_diff_deg
+from upm.ops.rotations import (
     _alternate_euler,
     axis_rotation,
     euler_to_matrix,
@@ -42,7 +43,6 @@ from upm.rotations import (
     rotation_exp,
     rotation_log,
 )
-from upm.skeleton import N_JOINTS
 from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
 
 _SWEEPS = 50

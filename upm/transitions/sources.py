@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from upm.angles import interpolate_deg, wrap_deg
-from upm.errors import UsageError
-from upm.skeleton import CLASS_SLICES, POSTURE_SIZE
+from upm.core.errors import UsageError
+from upm.motion.skeleton import CLASS_SLICES, POSTURE_SIZE
+from upm.ops.angles import interpolate_deg, wrap_deg
 
 
 def check_key_inputs(a_deg, b_deg, alpha):
@@ -181,7 +181,7 @@ def training_postures(catalog, split: str = "train", step: int = 1) -> np.ndarra
 
     Parameters
     ----------
-    catalog : upm.catalog.Catalog
+    catalog : upm.motion.catalog.Catalog
     split : str
         ``"train"`` (the clips.csv training split), ``"test"``, or ``""`` for all clips.
     step : int
@@ -191,7 +191,7 @@ def training_postures(catalog, split: str = "train", step: int = 1) -> np.ndarra
     ndarray, shape (N, 63)
         Wrapped to [-180, 180) (the sources compare wrapped differences anyway).
     """
-    from upm.class_maps import postures_of_clips
+    from upm.maps.class_maps import postures_of_clips
 
     names = catalog.names(split or None)
     if not names:

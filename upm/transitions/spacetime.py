@@ -38,9 +38,9 @@ import numpy as np
 from scipy.interpolate import BSpline
 from scipy.optimize import minimize
 
-from upm.kinematics import global_transforms
-from upm.rotations import axis_rotation
-from upm.skeleton import JOINTS, POSTURE_SIZE, Skeleton
+from upm.motion.kinematics import global_transforms
+from upm.motion.skeleton import JOINTS, POSTURE_SIZE, Skeleton
+from upm.ops.rotations import axis_rotation
 from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
 
 #: Segment mass as a share of body mass, per CMU bone (Winter, *Biomechanics and Motor
