@@ -50,6 +50,7 @@ def plot_metric_chart(path: str | os.PathLike, statistics: Summaries, methods, w
     from eval.metrics import HEADLINE, METRICS
     from eval.tables import DISPLAY
     from upm.core.fileio import atomic_open
+    from upm.transitions.registry import METHODS
 
     metrics = list(metrics or HEADLINE)
     columns = 4
@@ -85,7 +86,7 @@ def plot_metric_chart(path: str | os.PathLike, statistics: Summaries, methods, w
         ax.set_title(f"{label} ({better} is better)", fontsize=9)
         ax.grid(alpha=0.3, axis="y")
         for tick, name in zip(ax.get_xticklabels(), methods, strict=True):
-            if name == "upm":
+            if name in METHODS and METHODS[name].role in ("paper", "recommended"):
                 tick.set_fontweight("bold")
     for ax in axes[len(metrics):]:
         ax.axis("off")

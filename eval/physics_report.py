@@ -8,6 +8,11 @@ from typing import TYPE_CHECKING
 
 from eval.physics import CONTEXT_S, PERCENT, PHYSICS_METRICS
 from eval.records import REAL
+from upm.transitions.registry import get_method
+
+#: Bar colours by a method's role (:data:`upm.transitions.base.ROLES`); grey: real windows.
+ROLE_COLOURS = {"real": "#7f8c8d", "paper": "#c0392b", "recommended": "#27ae60",
+                "paper-comparison": "#2c3e50", "baseline": "#2c3e50", "ablation": "#95a5a6"}
 
 if TYPE_CHECKING:
     from eval.summaries import Summaries
@@ -129,8 +134,8 @@ def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, me
         return means, los, his
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
-    colours = ["#7f8c8d" if n == REAL else ("#c0392b" if n == "upm" else
-               "#27ae60" if n == "feasible" else "#2c3e50") for n in names]
+    colours = [ROLE_COLOURS["real"] if n == REAL else
+               ROLE_COLOURS.get(get_method(n).role, ROLE_COLOURS["baseline"]) for n in names]
     x = range(len(names))
     falls = bars("fell")[0]
     either, los, his = bars("fell_or_going_down")

@@ -17,6 +17,7 @@ import numpy as np
 from eval.metrics import HEADLINE, METRICS
 from eval.records import REAL
 from eval.statistics import GROUPS
+from upm.transitions.registry import methods_with_role
 
 if TYPE_CHECKING:
     from eval.summaries import Summaries
@@ -40,9 +41,6 @@ DISPLAY: dict[str, tuple[float, int, str]] = {
     "residual_force_peak_bw": (1.0, 3, "residual peak bw"),
     "tracking_error_deg": (1.0, 2, "tracking error deg"),
 }
-#: The baselines the headline table may pick its "best other baseline" from (the
-#: ablations classnn and snap are not baselines: they are UPM without its map).
-BASELINES = ("som", "slerp", "inertialize", "spacetime")
 #: Plain names of the groups.
 GROUP_NAMES = {
     "all": "all pairs", "ab_near": "A-B near (1st tercile)", "ab_middle": "A-B middle",
@@ -53,8 +51,9 @@ GROUP_NAMES = {
 
 def best_baseline(statistics: Summaries, frames: int, methods) -> str | None:
     """The baseline with the highest mean valid-frame share at window ``frames`` (ties:
-    the lower mean nearest-real distance), among :data:`BASELINES` that were run."""
-    candidates = [m for m in BASELINES if m in methods]
+    the lower mean nearest-real distance), among the methods of role ``"baseline"`` that
+    were run (the ablations are not baselines: they are UPM without its map)."""
+    candidates = [m for m in methods_with_role("baseline") if m in methods]
     if not candidates:
         return None
     return min(candidates, key=lambda m: (
@@ -275,8 +274,9 @@ def summary_markdown(result_meta: dict, statistics: Summaries) -> str:
         elif "linear" not in methods:
             parts += ["", "No UPM - linear tables: this run did not include linear."]
         if best is not None:
+            baselines = ", ".join(methods_with_role("baseline"))
             parts += ["", f"Best other baseline at this window (highest valid share among "
-                          f"{', '.join(BASELINES)}): **{best}**."]
+                          f"{baselines}): **{best}**."]
         parts += [
             "",
             "### Calibration: real windows per test clip (means)",
@@ -337,7 +337,8 @@ def headline_rows(statistics: Summaries, timing: dict, frames: int, methods) -> 
     """The headline for one window: feasible, UPM, linear, the best other baseline and
     the real windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
     best = best_baseline(statistics, frames, methods)
-    names = [m for m in ("feasible", "upm", "linear") if m in methods] + (
+    names = [m for role in ("recommended", "paper", "paper-comparison")
+             for m in methods_with_role(role) if m in methods] + (
         [best] if best else [])
     out = []
     for name in names + [REAL]:
