@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 #: The help's line width, in characters (argparse's default is the terminal's).
-WIDTH = 88
+WIDTH = 80
 #: Where ``--write`` puts the page, relative to the repository root.
 PAGE = Path("docs") / "reference" / "cli.md"
 REPO = Path(__file__).resolve().parents[2]
