@@ -51,13 +51,14 @@ def test_cmu_file_read_written_read_again_is_the_same(tmp_path, catalog):
 @given(st.integers(1, 5).flatmap(lambda t: st.tuples(
     arrays(float, (t, 63), elements=st.floats(-1000, 1000, allow_subnormal=False)),
     arrays(float, (t, 6), elements=st.floats(-100, 100, allow_subnormal=False)))))
-def test_write_read_round_trip_property(tmp_path, walk, arrays_pair):
+def test_write_read_round_trip_property(tmp_path, synthetic_catalog, arrays_pair):
+    skeleton = synthetic_catalog.skeleton("81")  # the CMU channels, as an ASF
     posture, root = arrays_pair
-    posture = np.where(walk.skeleton.declared, posture, 0.0)
-    motion = Motion(walk.skeleton, posture, root, fps=120.0)
+    posture = np.where(skeleton.declared, posture, 0.0)
+    motion = Motion(skeleton, posture, root, fps=120.0)
     path = tmp_path / "prop.amc"
     write_amc(path, motion)
-    back = read_amc(path, walk.skeleton)
+    back = read_amc(path, skeleton)
     np.testing.assert_allclose(back.posture_deg, posture, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(back.root, root, rtol=1e-9, atol=1e-9)
 
@@ -135,10 +136,10 @@ def test_malformed_amc(tmp_path, tiny, text, message, line):
     assert info.value.line == line
 
 
-def test_amc_of_another_skeleton(data_dir, tiny):
+def test_amc_of_another_skeleton(synthetic_dir, tiny):
     expected = "bone 'upperback' has values but no dofs in tiny.asf.*another skeleton"
     with pytest.raises(DataFileError, match=expected):
-        read_amc(data_dir / "02" / "02_01.amc", tiny)
+        read_amc(synthetic_dir / "81" / "81_01.amc", tiny)
 
 
 @pytest.mark.parametrize("content, message", [
@@ -148,3 +149,79 @@ def test_not_an_amc(tmp_path, tiny, content, message):
     path.write_bytes(content)
     with pytest.raises(DataFileError, match=message):
         read_amc(path, tiny)
+
+
+# --- the synthetic clips (tests/synthetic.py) -------------------------------------------
+
+def test_synthetic_clips_read_as_they_were_made(synthetic_catalog):
+    """Every clip of the synthetic folder, written by tests/synthetic.py's own AMC writer
+    (LF for subject 81, CRLF for 82), reads back as the motion it was made from."""
+    import dataclasses
+
+    from tests.synthetic import SUBJECTS, clip_spec, walk_motion
+
+    scale = {s.subject: s.scale for s in SUBJECTS}
+    assert len(synthetic_catalog) == 5
+    for info in synthetic_catalog:
+        motion = synthetic_catalog.load(info.name)
+        spec = clip_spec(info.name)
+        made = walk_motion(motion.skeleton, dataclasses.replace(
+            spec, speed_m_s=spec.speed_m_s * scale[info.subject]))
+        assert motion.n_frames == made.n_frames == info.listed_frames
+        assert motion.fps == spec.fps and motion.name == info.name
+        np.testing.assert_allclose(motion.posture_deg, made.posture_deg, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(motion.root, made.root, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(motion.extra_deg, made.extra_deg, rtol=1e-9, atol=1e-9)
+        assert not motion.posture_deg[:, ~motion.skeleton.declared].any()
+
+
+def test_synthetic_clips_stay_inside_the_limits_and_walk_forward(synthetic_catalog):
+    for info in synthetic_catalog:
+        motion = synthetic_catalog.load(info.name)
+        lo, hi = motion.skeleton.limits_deg.T
+        assert np.all((lo <= motion.posture_deg) & (motion.posture_deg <= hi)), info.name
+        travelled = np.linalg.norm(motion.root[-1, [0, 2]] - motion.root[0, [0, 2]])
+        assert travelled > 0.8 * motion.duration_s, info.name  # at least 0.8 m/s
+        steps = np.abs(np.diff(motion.posture_deg, axis=0)).max()
+        assert 0 < steps < 500 / motion.fps, info.name  # smooth: under 500 deg/s
+
+
+def test_written_synthetic_clip_reads_again_the_same(tmp_path, synthetic_catalog):
+    for name in ("81_02", "82_01"):  # LF and CRLF sources
+        motion = synthetic_catalog.load(name)
+        out = tmp_path / f"{name}.amc"
+        write_amc(out, motion)
+        again = read_amc(out, motion.skeleton, fps=motion.fps)
+        np.testing.assert_allclose(again.posture_deg, motion.posture_deg, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(again.root, motion.root, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(again.extra_deg, motion.extra_deg, rtol=1e-9, atol=1e-9)
+
+
+def test_crlf_and_lf_synthetic_amc_read_the_same(tmp_path, synthetic_dir, synthetic_catalog):
+    text = (synthetic_dir / "82" / "82_02.amc").read_bytes()
+    assert b"\r\n" in text
+    lf = tmp_path / "lf.amc"
+    lf.write_bytes(text.replace(b"\r\n", b"\n"))
+    skeleton = synthetic_catalog.skeleton("82")
+    np.testing.assert_array_equal(read_amc(lf, skeleton).posture_deg,
+                                  read_amc(synthetic_dir / "82" / "82_02.amc",
+                                           skeleton).posture_deg)
+
+
+@pytest.mark.parametrize("frame, bone, new, message", [
+    (3, "lfemur", "lfemur 1 2", "bone 'lfemur' needs 3 values, found 2"),
+    (40, "rtibia", "rtibia x", "non-numeric value"),
+    (144, "head", "hed 0 0 0", "unknown bone 'hed'"),
+])
+def test_errors_in_a_crlf_amc_name_the_file_and_line(tmp_path, synthetic_dir,
+                                                     synthetic_catalog, frame, bone, new,
+                                                     message):
+    lines = (synthetic_dir / "82" / "82_02.amc").read_bytes().decode().split("\r\n")
+    start = lines.index(str(frame))
+    at = next(i for i in range(start, len(lines)) if lines[i].split()[0] == bone)
+    lines[at] = new
+    path = tmp_path / "82_02.amc"
+    path.write_bytes("\r\n".join(lines).encode())
+    with pytest.raises(DataFileError, match=message) as info:
+        read_amc(path, synthetic_catalog.skeleton("82"))
+    assert info.value.path == str(path) and info.value.line == at + 1

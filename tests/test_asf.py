@@ -110,3 +110,75 @@ def test_not_an_asf(tmp_path, content, message):
 def test_missing_file(tmp_path):
     with pytest.raises(DataFileError, match="no such ASF file"):
         read_asf(tmp_path / "nope.asf")
+
+
+# --- the synthetic skeletons (tests/synthetic.py) ---------------------------------------
+
+@pytest.mark.parametrize("scale, newline", [(1.0, "\n"), (0.88, "\r\n")])
+def test_generic_skeleton_written_as_asf_reads_back(tmp_path, scale, newline):
+    from humanoid_xml.description import generic_skeleton
+    from tests.synthetic import CMU_LENGTH_UNIT, asf_text
+
+    generic = generic_skeleton()
+    path = tmp_path / "generic.asf"
+    path.write_bytes(asf_text(generic, name="g", scale=scale, newline=newline).encode())
+    s = read_asf(path)
+    assert s.name == "g" and s.bone_names == generic.bone_names
+    np.testing.assert_array_equal(s.parents, generic.parents)
+    np.testing.assert_allclose(s.directions, generic.directions, atol=1e-15)
+    np.testing.assert_allclose(s.lengths_m, scale * generic.lengths_m, rtol=1e-12)
+    assert s.length_to_m == pytest.approx(0.0254 / CMU_LENGTH_UNIT)
+    np.testing.assert_array_equal(s.axis_deg, generic.axis_deg)
+    assert s.axis_order == generic.axis_order and s.dofs == generic.dofs
+    np.testing.assert_allclose(s.axis_matrices, generic.axis_matrices, atol=1e-15)
+    np.testing.assert_array_equal(s.limits_deg, generic.limits_deg)
+    np.testing.assert_array_equal(s.declared, generic.declared)
+    assert s.root_order == generic.root_order and s.root_axis_order == "XYZ"
+    assert standing_height_m(s) == pytest.approx(scale * standing_height_m(generic))
+    assert s.bone_lines[s.bone_index("lfemur")] == _line_of(
+        path.read_bytes().decode().replace("\r\n", "\n"), "name lfemur") - 2  # its "begin"
+
+
+def test_synthetic_subjects(synthetic_catalog):
+    """The two subjects of the synthetic folder: the CMU bone set, parents first, 45
+    declared DOFs, 1.75 m and 0.88 x 1.75 m tall."""
+    heights = {}
+    for subject in ("81", "82"):
+        s = synthetic_catalog.skeleton(subject)
+        assert s.bone_names[0] == "root" and len(s.bone_names) == 31
+        assert all(s.parents[b] < b for b in range(1, 31))
+        assert s.declared.sum() == 45
+        heights[subject] = standing_height_m(s)
+    assert heights["82"] / heights["81"] == pytest.approx(0.88)
+
+
+def test_crlf_and_lf_synthetic_asf_read_the_same(tmp_path, synthetic_dir):
+    text = (synthetic_dir / "82" / "82.asf").read_bytes()
+    assert b"\r\n" in text
+    lf = tmp_path / "lf.asf"
+    lf.write_bytes(text.replace(b"\r\n", b"\n"))
+    a, b = read_asf(synthetic_dir / "82" / "82.asf"), read_asf(lf)
+    np.testing.assert_array_equal(a.limits_deg, b.limits_deg)
+    np.testing.assert_array_equal(a.offsets_m, b.offsets_m)
+    assert a.bone_lines == b.bone_lines
+
+
+@pytest.mark.parametrize("key, new, message", [
+    ("limits", "limits (30.0 -120.0)", "lower above upper"),
+    ("dof", "dof rx ry rz rx", "a dof is listed twice"),
+    ("axis", "axis 0 0 20.0 XYW", "not a permutation of XYZ"),
+    ("length", "length -6.7", "cannot be negative"),
+    ("direction", "direction 0.3 -0.9", "direction needs 3 numbers, found 2"),
+])
+def test_errors_in_a_crlf_asf_name_the_file_and_line(tmp_path, synthetic_dir, key, new,
+                                                     message):
+    """Line numbers count CRLF lines as lines (the synthetic subject 82 has CRLF ends)."""
+    lines = (synthetic_dir / "82" / "82.asf").read_bytes().decode().split("\r\n")
+    bone = lines.index("     name lfemur")
+    at = next(i for i in range(bone, len(lines)) if lines[i].split()[:1] == [key])
+    lines[at] = "    " + new
+    path = tmp_path / "82.asf"
+    path.write_bytes("\r\n".join(lines).encode())
+    with pytest.raises(DataFileError, match=message) as info:
+        read_asf(path)
+    assert info.value.path == str(path) and info.value.line == at + 1

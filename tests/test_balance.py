@@ -17,6 +17,8 @@ from controller.balance.run import WINDOW_KEYS, replay, window_summary
 from controller.qpos import joint_layout
 from controller.tracking.servo import track_qpos
 
+pytestmark = pytest.mark.physics  # free-root runs
+
 
 @pytest.fixture(scope="module")
 def walk_qpos(model02, walk):

@@ -4,6 +4,8 @@ naming it), one CSV writer, and a CSV that reads back to the same table with int
 import math
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from eval.metrics import METRICS
 from eval.records import COLUMNS, REAL, Records, csv_text
@@ -82,3 +84,26 @@ def test_one_csv_writer_for_every_table():
                                  "20,upm,0.30000000000000004,3", '20,"a, b",,0', "10,real,,2"]
     with pytest.raises(ValueError, match="2 cells under 4 columns"):
         csv_text(("a", "b", "c", "d"), [(1, 2)])
+
+
+_rows = st.lists(st.tuples(
+    st.sampled_from(("pair", REAL)), st.integers(0, 10 ** 6), st.integers(1, 240),
+    st.sampled_from(("upm", "linear", 'a "quoted", comma')), st.sampled_from(tuple(METRICS)),
+    st.floats(allow_nan=True, allow_infinity=True)), max_size=30)
+
+
+@given(_rows)
+def test_any_table_reads_back_from_its_csv_exactly(rows):
+    records = Records(METRICS)
+    expected = {}
+    for kind, index, window, method, metric, value in rows:
+        method = REAL if kind == REAL else method
+        records.add(kind, index, window, method, {metric: value})
+        expected[(kind, index, window, method, metric)] = value
+    back = Records.from_csv(records.to_csv(), METRICS, "scores.csv")
+    assert back == records and len(back) == len(expected)
+    for kind, index, window, method, metric, value in back.rows():
+        want = expected[(kind, index, window, method, metric)]
+        assert (math.isnan(want) and math.isnan(value)) or (
+            value == want and math.copysign(1, value) == math.copysign(1, want))
+        assert index in back.ids(kind, window, method)

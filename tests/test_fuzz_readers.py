@@ -60,20 +60,36 @@ def test_mutated_asf_is_read_or_refused_naming_it(tmp_path, asf_bytes):
     assert outcomes["refused"] > N_CASES // 3 and outcomes["read"] > 10, outcomes
 
 
-def test_mutated_asf_builds_a_humanoid_or_names_the_asf(tmp_path, asf_bytes):
-    """The model path the commands share: MuJoCo's refusals name the ASF, one line."""
-    from humanoid_xml import subject_model_path
+def test_mutated_asf_builds_a_humanoid_or_names_the_asf(tmp_path, asf_bytes, monkeypatch):
+    """The model path the commands share (read the ASF, check it, build the MJCF, compile
+    it in MuJoCo for the gains): a refusal names the ASF in one line; a degenerate bone (a
+    zero, vanishing or astronomic length, or a zero direction) is always refused; a model
+    that is built loads in MuJoCo with a hinge per declared DOF and a finite mass. One
+    mutation per case: a third or more of the single absurd numbers (in an id, the root's
+    position, an axis angle or a limit, where 0 or 1e-300 is still valid) leave a skeleton
+    the humanoid can be built from."""
+    from humanoid_xml import load_model, subject_model_path
+    from tests.fuzz_mutations import absurd_number, all_numbers, degenerate_bone
+    from upm.motion.asf import read_asf
 
+    monkeypatch.setenv("UPM_CACHE", str(tmp_path / "cache"))
     rng = random.Random(1515)
-    built = 0
-    for case in range(12):
+    outcomes = {"built": 0, "refused": 0}
+    for case in range(36):
+        mutator = rng.choice((degenerate_bone, absurd_number, all_numbers))
         path = tmp_path / f"case{case}.asf"
-        path.write_bytes(mutate(asf_bytes, rng, ASF_MUTATORS[-2:] + ASF_MUTATORS[2:4]))
+        path.write_bytes(mutate(asf_bytes, rng, (mutator,), rounds=1))
         try:
-            subject_model_path(path)
-            built += 1
+            model = load_model(subject_model_path(path))
         except DataFileError as exc:
             _assert_names(exc, path)
+            outcomes["refused"] += 1
+            continue
+        assert mutator is not degenerate_bone, f"case {case}: a degenerate bone was built"
+        assert model.nu == int(read_asf(path).declared.sum()) == 45
+        assert np.isfinite(model.body_mass).all() and 40 < model.body_mass.sum() < 150
+        outcomes["built"] += 1
+    assert outcomes["built"] >= 3 and outcomes["refused"] >= 18, outcomes
 
 
 @pytest.mark.parametrize("text, message", [

@@ -16,6 +16,8 @@ from humanoid_xml.strength import GRAVITY, REFERENCE_MASS_KG, STRENGTH, torque_l
 from upm import Motion
 from upm.motion.skeleton import joint_dof_index
 
+pytestmark = pytest.mark.physics  # free-root runs
+
 #: The subjects of the standing measurements (and the generic adult).
 STANDING = ("02", "05", "16", "35", "generic")
 

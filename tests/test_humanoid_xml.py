@@ -409,3 +409,70 @@ def test_load_model_multiplies_every_torque_limit_by_the_strength():
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="strength"):
             humanoid_xml.load_model(default_model_path(), strength=bad)
+
+
+# --- the synthetic subjects (no CMU data) ------------------------------------------------
+
+@pytest.fixture(scope="module")
+def synthetic_models(synthetic_catalog):
+    return {s: mujoco.MjModel.from_xml_string(build_mjcf(synthetic_catalog.skeleton(s)))
+            for s in ("81", "82")}
+
+
+def test_fk_equals_project_fk_on_the_synthetic_clips(synthetic_catalog, synthetic_models):
+    """Every bone end (a site) after mj_kinematics equals upm.forward_kinematics, rotated
+    to z up, within 1 mm, on every frame of every synthetic clip, each on its subject's
+    humanoid (the generic skeleton at two statures, read from the ASF written for it)."""
+    frames = 0
+    for info in synthetic_catalog:
+        motion = synthetic_catalog.load(info.name)
+        model = synthetic_models[info.subject]
+        data = mujoco.MjData(model)
+        sites = _site_ids(model, motion.skeleton)
+        assert min(sites) >= 0
+        ours = vectors_to_mj(forward_kinematics(motion))
+        theirs = np.empty_like(ours)
+        for t, q in enumerate(to_qpos(model, motion)):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(model, data)
+            theirs[t] = data.site_xpos[sites]
+        error = np.abs(theirs - ours).max(axis=(0, 2))  # per bone, over frames and axes
+        worst = motion.skeleton.bone_names[int(error.argmax())]
+        assert error.max() < 1e-3, f"{info.name}: {worst} differs by {error.max() * 1e3:.3f} mm"
+        assert error.max() < 1e-5  # in fact micrometres: the MJCF's 6-digit numbers
+        frames += motion.n_frames
+    assert frames == sum(info.listed_frames for info in synthetic_catalog)
+
+
+def test_body_rotations_equal_project_fk_on_a_synthetic_clip(synthetic_catalog,
+                                                             synthetic_models):
+    motion = synthetic_catalog.load("82_02")
+    model = synthetic_models["82"]
+    data = mujoco.MjData(model)
+    rotations, _ = global_transforms(motion.skeleton, motion.posture_deg[::9],
+                                     motion.root[::9])
+    bodies = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b)
+              for b in motion.skeleton.bone_names]
+    for t, q in enumerate(to_qpos(model, motion)[::9]):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        theirs = data.xmat[bodies].reshape(-1, 3, 3)
+        np.testing.assert_allclose(theirs, ASF_TO_MJ @ rotations[t] @ ASF_TO_MJ.T, atol=1e-6)
+
+
+def test_synthetic_humanoids_have_the_asf_ranges_and_their_statures(synthetic_catalog,
+                                                                    synthetic_models):
+    statures = {}
+    for subject, model in synthetic_models.items():
+        skeleton = synthetic_catalog.skeleton(subject)
+        names = hinge_names(skeleton)
+        assert model.nu == len(names) == 45
+        for name in names:
+            j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+            i = POSTURE_DOF_NAMES.index(name.replace("_", "."))
+            np.testing.assert_allclose(np.rad2deg(model.jnt_range[j]), skeleton.limits_deg[i],
+                                       atol=1e-9)
+        statures[subject] = stature_m(skeleton, capsules(skeleton))
+        assert float(model.body_mass.sum()) == pytest.approx(BMI_KG_M2 * statures[subject] ** 2,
+                                                             rel=1e-4)
+    assert statures["82"] / statures["81"] == pytest.approx(0.88, rel=1e-3)

@@ -16,6 +16,8 @@ from controller.balance.control import MODES, torque_model
 from controller.balance.follow import follow
 from controller.balance.lookahead import Lookahead
 
+pytestmark = pytest.mark.physics  # free-root runs
+
 
 @pytest.fixture(scope="module")
 def short_walk(model02, walk):

@@ -244,6 +244,12 @@ def small_map(catalog):
     return UniformPostureMap().fit(x, clip_names=names), x
 
 
+@pytest.fixture(scope="module")
+def synthetic_map(synthetic_maps):
+    """The UPM of the synthetic train split (tests/synthetic.py) and its postures."""
+    return synthetic_maps["upm"], synthetic_maps["postures"]
+
+
 def test_classes_trained_in_parallel_equal_trained_in_order(small_map):
     parallel, x = small_map  # default workers: every usable CPU
     in_order = UniformPostureMap(workers=1).fit(x)
@@ -295,8 +301,8 @@ def _is_neuron(upm, posture):
                for c in CLASS_NAMES)
 
 
-def test_key_posture_is_made_of_neurons_and_ends_at_a_and_b(small_map):
-    upm, x = small_map
+def test_key_posture_is_made_of_neurons_and_ends_at_a_and_b(synthetic_map):
+    upm, x = synthetic_map
     a, b = x[10], x[-10]
     for alpha in (0.0, 0.25, 0.5, 1.0):
         assert _is_neuron(upm, upm.key_posture(a, b, alpha))
@@ -304,8 +310,8 @@ def test_key_posture_is_made_of_neurons_and_ends_at_a_and_b(small_map):
     assert np.array_equal(upm.key_posture(a, b, 1.0), upm.nearest_neurons(b))
 
 
-def test_key_posture_batched_equals_one_at_a_time(small_map):
-    upm, x = small_map
+def test_key_posture_batched_equals_one_at_a_time(synthetic_map):
+    upm, x = synthetic_map
     a, b = x[:50], x[-50:]
     alpha = np.linspace(0, 1, 50)
     batch = upm.key_posture(a, b, alpha)
@@ -400,8 +406,8 @@ def test_key_posture_goes_the_short_way_round():
     ((np.full(63, np.nan), np.zeros(63), 0.5), "NaN"),
     ((np.zeros((3, 63)), np.zeros((4, 63)), 0.5), "do not broadcast"),
 ])
-def test_key_posture_bad_input_is_a_usage_error(small_map, args, message):
-    upm, _ = small_map
+def test_key_posture_bad_input_is_a_usage_error(synthetic_map, args, message):
+    upm, _ = synthetic_map
     with pytest.raises(UsageError, match=message.replace("[", r"\[").replace("]", r"\]")):
         upm.key_posture(*args)
 
@@ -419,8 +425,8 @@ def test_untrained_map_and_bad_parameters_are_usage_errors():
 
 # -- save and load ---------------------------------------------------------------------
 
-def test_save_load_gives_the_same_map_and_queries(small_map, tmp_path):
-    upm, x = small_map
+def test_save_load_gives_the_same_map_and_queries(synthetic_map, tmp_path):
+    upm, x = synthetic_map
     path = tmp_path / "map.npz"
     upm.save(path)
     for loaded in (UniformPostureMap.load(path), load_map(path)):
@@ -429,7 +435,7 @@ def test_save_load_gives_the_same_map_and_queries(small_map, tmp_path):
             assert np.array_equal(loaded.neurons[c], upm.neurons[c])
         assert loaded.params == upm.params and loaded.stats == upm.stats
         assert loaded.provenance == upm.provenance
-        assert loaded.provenance["clip_names"] == ["02_02", "09_06", "35_01"]
+        assert loaded.provenance["clip_names"] == ["81_01", "81_02", "82_01"]
         a, b = x[:30], x[-30:]
         assert np.array_equal(loaded.key_posture(a, b, 0.3), upm.key_posture(a, b, 0.3))
 
@@ -455,8 +461,8 @@ def _rewrite(src, dst, **changes):
     ("bad meta", "corrupt metadata"),
     ("pickled", "not a readable posture map"),
 ])
-def test_wrong_or_corrupt_files_fail_clearly(small_map, tmp_path, case, message):
-    upm, _ = small_map
+def test_wrong_or_corrupt_files_fail_clearly(synthetic_map, tmp_path, case, message):
+    upm, _ = synthetic_map
     good = tmp_path / "good.npz"
     upm.save(good)
     bad = tmp_path / "bad.npz"

@@ -2,8 +2,11 @@
 
 import mujoco
 import numpy as np
+import pytest
 
 from controller.raw_clock import RawStepClock
+
+pytestmark = pytest.mark.physics  # free-root runs
 
 
 class FakeClock:

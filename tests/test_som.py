@@ -52,10 +52,10 @@ def test_som_is_deterministic_and_sized_by_its_grid():
 
 
 @pytest.fixture(scope="module")
-def som_and_data(catalog):
+def som_and_data(synthetic_catalog):
     from upm.maps.class_maps import postures_of_clips
 
-    x, names = postures_of_clips(catalog, ["02_02", "09_06"])
+    x, names = postures_of_clips(synthetic_catalog, ["81_02", "82_01"])
     return KohonenSOM(grid=(6, 8), epochs=6).fit(x, clip_names=names), x
 
 
@@ -79,7 +79,7 @@ def test_som_save_load_and_kind(som_and_data, tmp_path):
     assert isinstance(loaded, KohonenSOM) and loaded.grids == som.grids
     a, b = x[:5], x[-5:]
     assert np.array_equal(loaded.key_posture(a, b, 0.4), som.key_posture(a, b, 0.4))
-    assert loaded.provenance["clip_names"] == ["02_02", "09_06"]
+    assert loaded.provenance["clip_names"] == ["81_02", "82_01"]
     with pytest.raises(DataFileError, match="holds a 'som' map"):
         UniformPostureMap.load(path)
     with np.load(path, allow_pickle=False) as data:

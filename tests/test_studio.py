@@ -111,6 +111,7 @@ def _figure_pixels(rgb: np.ndarray) -> int:
     return count
 
 
+@pytest.mark.browser
 @pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine (scripts/setup "
                     "installs Debian's chromium; none could be installed here)")
 def test_page_in_headless_chromium_follows_alpha(session, tmp_path):

@@ -20,6 +20,8 @@ from controller.tracking.servo import (
 )
 from upm.motion.skeleton import joint_dof_index
 
+pytestmark = pytest.mark.physics  # free-root runs
+
 
 @pytest.fixture(scope="module")
 def walk_segment(walk):

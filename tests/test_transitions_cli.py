@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from upm.cli import main
+from upm.maps.map_file import load_map
 from upm.motion.amc import read_amc
 
 
@@ -89,3 +90,51 @@ def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     assert message in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
     assert not (tmp_path / "x.amc").exists()
+
+
+# --- on the synthetic data folder (unit tier) ---------------------------------------------
+
+def test_transition_on_the_synthetic_data_writes_amc_and_json(synthetic_dir, synthetic_catalog,
+                                                              tmp_path, capsys):
+    """81_02 into the shorter subject's 82_02: the AMC on 81's skeleton, the context frames
+    of clip 1 as they are, the window between them, clip 2 after it."""
+    out, report = tmp_path / "t.amc", tmp_path / "t.json"
+    code = main(["transition", "--data", str(synthetic_dir), "--from", "81_02@100", "--to",
+                 "82_02@20", "--method", "inertialize", "--frames", "16", "--context", "24",
+                 "--out", str(out), "--json", str(report)])
+    assert code == 0
+    assert "window = frames 24-39" in capsys.readouterr().out
+    motion = read_amc(out, synthetic_catalog.skeleton("81"), fps=120.0)
+    assert motion.n_frames == 24 + 16 + 24
+    run_clip = synthetic_catalog.load("81_02")
+    np.testing.assert_allclose(motion.posture_deg[:24], run_clip.posture_deg[77:101], atol=1e-6)
+    after = synthetic_catalog.load("82_02").posture_deg[20:44]  # postures carry over as
+    np.testing.assert_allclose(motion.posture_deg[40:], after, atol=1e-6)  # they are
+    data = json.loads(report.read_text())
+    assert (data["window_first_frame"], data["window_stop_frame"]) == (24, 40)
+    assert data["from"] == "81_02@100" and data["to"] == "82_02@20"
+    np.testing.assert_allclose(np.array(data["window_posture_deg"]), motion.posture_deg[24:40],
+                               atol=1e-5)
+
+
+def test_train_then_transition_with_the_map_on_the_synthetic_data(synthetic_dir,
+                                                                  synthetic_catalog,
+                                                                  tmp_path, capsys):
+    """The paper's pipeline from the command line: train a UPM on the train split, then
+    a ``upm`` transition with it; the key posture (in the JSON) is made of its neurons."""
+    from upm.motion.skeleton import CLASS_NAMES, CLASS_SLICES
+
+    path = tmp_path / "upm.npz"
+    assert main(["train", "--data", str(synthetic_dir), "--out", str(path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["kind"] == "upm" and summary["clips"] == ["81_01", "81_02", "82_01"]
+    out, report = tmp_path / "t.amc", tmp_path / "t.json"
+    assert main(["transition", "--data", str(synthetic_dir), "--map", str(path), "--from",
+                 "81_03@-1", "--to", "81_01@0", "--out", str(out), "--json",
+                 str(report)]) == 0
+    key = np.array(json.loads(report.read_text())["key_posture_deg"])
+    upm = load_map(path)
+    for c in CLASS_NAMES:  # the JSON keeps 5 decimals
+        nearest = np.abs(upm.neurons[c] - key[CLASS_SLICES[c]]).max(axis=1).min()
+        assert nearest < 1e-5, c
+    assert read_amc(out, synthetic_catalog.skeleton("81")).n_frames == 120 + 20 + 120

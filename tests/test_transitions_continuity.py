@@ -1,9 +1,8 @@
-"""Every method joins real clips without a jump at both window edges — positions (C0) for
-all, velocities too (C1) where the method promises it — including across the +-180 wrap.
+"""Every method joins clips without a jump at both window edges — positions (C0) for
+all, velocities too (C1) where the method promises it — including across the +-180 wrap:
+on real pairs (data tier) and on the synthetic ones (unit tier, tests/synthetic.py).
 
-The checks are in tests/transition_data.py (with their tolerances and why). ``upm`` and
-``som`` run with the classnn source standing in for the trained maps (same code path:
-only the key posture's origin differs).
+The checks are in tests/transition_data.py (with their tolerances and why).
 """
 
 import dataclasses
@@ -12,7 +11,15 @@ import numpy as np
 import pytest
 
 from controller.checks.kinematic_check import HumanoidChecker
-from tests.transition_data import PAIRS, feasible_limit_turns, pair, sources, window_edges
+from tests.transition_data import (
+    PAIRS,
+    SYNTHETIC_PAIRS,
+    feasible_limit_turns,
+    pair,
+    sources,
+    synthetic_pair,
+    window_edges,
+)
 from upm.maps.posture_map import UniformPostureMap
 from upm.maps.som import KohonenSOM
 from upm.motion.limits import limit_excess_deg
@@ -51,6 +58,28 @@ def test_joins_on_real_pairs(data_dir, index):
             assert c1_a <= 0 and c1_b <= 0, (method, PAIRS[index], c1_a, c1_b)
 
 
+@pytest.mark.parametrize("index", range(len(SYNTHETIC_PAIRS)))
+def test_joins_on_synthetic_pairs(synthetic_catalog, synthetic_sources, index):
+    before, after = synthetic_pair(synthetic_catalog, index)
+    for method in FAST + (["spacetime"] if index == 0 else []):  # spacetime: about 1 s
+        result = transition(method, before, after, 20, 0.5, synthetic_sources.get(method))
+        (c0_a, c1_a), (c0_b, c1_b) = window_edges(result)
+        assert c0_a <= 0 and c0_b <= 0, (method, SYNTHETIC_PAIRS[index], c0_a, c0_b)
+        if method == "feasible":
+            skip = feasible_limit_turns(before, after)
+            (_, c1_a), (_, c1_b) = window_edges(result, skip)
+        if METHODS[method].continuity == "C1":
+            assert c1_a <= 0 and c1_b <= 0, (method, SYNTHETIC_PAIRS[index], c1_a, c1_b)
+
+
+def test_the_velocity_check_catches_a_linear_blend_on_synthetic_pairs(synthetic_catalog):
+    """The C1 check is not vacuous on the smooth synthetic curves either."""
+    for index in range(len(SYNTHETIC_PAIRS)):
+        before, after = synthetic_pair(synthetic_catalog, index)
+        (_, c1_a), (_, c1_b) = window_edges(transition("linear", before, after, 20))
+        assert c1_a > 0 and c1_b > 0, SYNTHETIC_PAIRS[index]
+
+
 def test_the_velocity_check_catches_a_linear_blend(data_dir):
     """The C1 check can fail: the linear blend's velocity jump fails it on real pairs."""
     failures = 0
@@ -61,9 +90,10 @@ def test_the_velocity_check_catches_a_linear_blend(data_dir):
     assert failures >= len(PAIRS)
 
 
-def test_the_position_check_catches_a_jump(data_dir):
-    before, after = pair(data_dir, 0)
-    result = _run(data_dir, "classnn", before, after)
+def test_the_position_check_catches_a_jump(synthetic_catalog):
+    before, after = synthetic_pair(synthetic_catalog, 0)
+    result = transition("inertialize", before, after, 20)
+    assert all(e <= 0 for edge in window_edges(result) for e in edge)  # joined, until:
     window = result.window
     shifted = result.motion.posture_deg.copy()
     shifted[window, POSTURE_DOF_NAMES.index("lfemur.rx")] += 3.0  # a 3-degree jump
@@ -72,9 +102,10 @@ def test_the_position_check_catches_a_jump(data_dir):
     assert c0_a > 0 and c0_b > 0
 
 
-def _wrap_pair(data_dir):
-    """A real pair with one slowly moving DOF moved to sit at +175 at A and -175 at B."""
-    before, after = pair(data_dir, 0)
+def _wrap_pair(catalog):
+    """A synthetic pair with one slowly moving DOF moved to sit at +175 at A and -175 at
+    B."""
+    before, after = synthetic_pair(catalog, 0)
     declared = np.flatnonzero(before.skeleton.declared)
     speed = (np.abs(np.diff(before.posture_deg[-3:, declared], axis=0)).max(axis=0)
              + np.abs(np.diff(after.posture_deg[:3, declared], axis=0)).max(axis=0))
@@ -86,8 +117,8 @@ def _wrap_pair(data_dir):
 
 
 @pytest.mark.parametrize("method", list(METHODS))
-def test_joins_across_the_wrap(data_dir, method):
-    before, after, dof = _wrap_pair(data_dir)
+def test_joins_across_the_wrap(synthetic_catalog, method):
+    before, after, dof = _wrap_pair(synthetic_catalog)
     # Key sources that know postures near +-180 in that DOF: fitted on the two clips.
     own = np.concatenate([before.posture_deg, after.posture_deg])
     kind = METHODS[method].key_kind

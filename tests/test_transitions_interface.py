@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from tests.transition_data import pair, sources
+from tests.transition_data import pair, synthetic_pair
 from upm.core.errors import UsageError
 from upm.motion.amc import read_amc, write_amc
 from upm.ops.angles import angle_diff_deg
@@ -19,9 +19,9 @@ def test_registry():
 
 
 @pytest.mark.parametrize("method", list(METHODS))
-def test_result_layout(data_dir, method):
-    before, after = pair(data_dir, 0)
-    source = sources(data_dir).get(method) if METHODS[method].needs_key_source else None
+def test_result_layout(synthetic_catalog, synthetic_sources, method):
+    before, after = synthetic_pair(synthetic_catalog, 0)  # two subjects, both at 120 fps
+    source = synthetic_sources.get(method)
     result = transition(method, before, after, 12, 0.5, source)
     n1, n2 = before.n_frames, after.n_frames
     assert result.method == method and result.frames == 12 and result.alpha == 0.5
@@ -41,11 +41,12 @@ def test_result_layout(data_dir, method):
     assert np.all(window[:, ~before.skeleton.declared] == 0)
     assert motion.extra_deg.shape == (motion.n_frames, len(before.skeleton.extra_channels))
     assert motion.skeleton is before.skeleton and motion.fps == before.fps
+    assert result.diagnostics["root_scale"] != 1.0  # the other subject, scaled
 
 
-def test_written_amc_reads_back(data_dir, tmp_path):
-    before, after = pair(data_dir, 0)
-    result = transition("classnn", before, after, 20, 0.5, sources(data_dir)["classnn"])
+def test_written_amc_reads_back(synthetic_catalog, synthetic_sources, tmp_path):
+    before, after = synthetic_pair(synthetic_catalog, 0)
+    result = transition("classnn", before, after, 20, 0.5, synthetic_sources["classnn"])
     path = tmp_path / "t.amc"
     write_amc(path, result.motion)
     back = read_amc(path, before.skeleton, fps=before.fps)
@@ -64,6 +65,18 @@ def test_different_frame_rates_are_resampled(data_dir):
     assert result.motion.n_frames == before.n_frames + 10 + (after.n_frames - 1) // 2 + 1
 
 
+def test_a_lower_frame_rate_is_resampled_up(synthetic_catalog):
+    before, after = synthetic_pair(synthetic_catalog, 2)  # 81_03 (120 fps) into 82_01 (60)
+    assert before.fps == 120 and after.fps == 60
+    result = transition("linear", before, after, 10)
+    assert result.motion.fps == 120
+    assert result.diagnostics["resampled_from_fps"] == 60
+    assert result.motion.n_frames == before.n_frames + 10 + 2 * (after.n_frames - 1) + 1
+    # B is clip 2's first frame, then every other frame is one of clip 2's own postures.
+    resampled = result.motion.posture_deg[result.b_index::2]
+    np.testing.assert_allclose(angle_diff_deg(resampled, after.posture_deg), 0, atol=1e-9)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"method": "nope"}, "no transition method 'nope'"),
     ({"frames": 0}, "window length"),
@@ -76,8 +89,8 @@ def test_different_frame_rates_are_resampled(data_dir):
     ({"method": "classnn", "key_source": object()}, "has no key_posture"),
     ({"context": 0}, "context"),
 ])
-def test_bad_input_is_a_usage_error(data_dir, kwargs, message):
-    before, after = pair(data_dir, 0)
+def test_bad_input_is_a_usage_error(synthetic_catalog, kwargs, message):
+    before, after = synthetic_pair(synthetic_catalog, 1)
     args = {"method": "linear", "frames": 20, "alpha": 0.5, "key_source": None}
     extra = {k: kwargs.pop(k) for k in list(kwargs) if k == "context"}
     args.update(kwargs)
@@ -88,18 +101,18 @@ def test_bad_input_is_a_usage_error(data_dir, kwargs, message):
                    args["key_source"], **extra)
 
 
-def test_empty_clip_is_a_usage_error(data_dir):
-    before, after = pair(data_dir, 0)
+def test_empty_clip_is_a_usage_error(synthetic_catalog):
+    before, after = synthetic_pair(synthetic_catalog, 1)
     with pytest.raises(UsageError, match="no frames"):
         transition("linear", before.frames(0, 0), after)
 
 
-def test_short_clips_and_short_windows(data_dir):
+def test_short_clips_and_short_windows(synthetic_catalog, synthetic_sources):
     """One-frame clips (a held pose) and one-frame windows work for every method that
     can; velocities of a one-frame clip are zero."""
-    before, after = pair(data_dir, 0)
+    before, after = synthetic_pair(synthetic_catalog, 0)
     for method in METHODS:
-        source = sources(data_dir).get(method) if METHODS[method].needs_key_source else None
+        source = synthetic_sources.get(method)
         for frames in (1, 2, 5):
             result = transition(method, before.frames(-1, None), after.frames(0, 1), frames,
                                 0.5, source)

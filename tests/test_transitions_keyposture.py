@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.transition_data import pair, sources
+from tests.transition_data import synthetic_pair
 from upm.core.errors import UsageError
 from upm.motion.skeleton import CLASS_SLICES
 from upm.ops.angles import angle_diff_deg, angular_distance_sq, interpolate_deg, wrap_deg
@@ -100,11 +100,11 @@ def test_bad_training_postures():
 
 
 @pytest.mark.parametrize("method", KEY_METHODS)
-def test_window_passes_through_the_key_posture(data_dir, method):
+def test_window_passes_through_the_key_posture(synthetic_catalog, synthetic_sources, method):
     """alpha = 0.5, odd L: the middle window frame is the key posture."""
-    before, after = pair(data_dir, 1)
+    before, after = synthetic_pair(synthetic_catalog, 1)
     for frames in (21, 9):
-        result = transition(method, before, after, frames, 0.5, sources(data_dir)[method])
+        result = transition(method, before, after, frames, 0.5, synthetic_sources[method])
         assert result.key_time == (frames + 1) / 2
         middle = result.motion.posture_deg[result.a_index + int(result.key_time)]
         np.testing.assert_allclose(angle_diff_deg(middle, result.key_posture_deg), 0, atol=1e-9)
@@ -117,17 +117,16 @@ def _position_along(key, a, b):
 
 
 @pytest.mark.parametrize("method", KEY_METHODS)
-def test_alpha_moves_the_key_monotonically_from_a_to_b(data_dir, method):
-    """A and B are training frames (02_02 is in the train split; the sources keep every
-    2nd frame), so for classnn and snap alpha = 0 gives A and alpha = 1 gives B exactly;
-    for the maps, the neurons nearest A and B. In between, the key and the window's middle
-    frame move along A->B without going back (nearest-neighbour search along a segment is
-    monotone in the projection, class by class)."""
-    from upm.motion.catalog import Catalog
-
-    clip = Catalog(data_dir).load("02_02")
-    before, after = clip.frames(60, 101), clip.frames(150, 190)  # A = 100, B = 150: even
-    source = sources(data_dir)[method]
+def test_alpha_moves_the_key_monotonically_from_a_to_b(synthetic_catalog, synthetic_sources,
+                                                       method):
+    """A and B are training frames (81_02 is in the synthetic train split; the sources
+    keep every frame), so for classnn and snap alpha = 0 gives A and alpha = 1 gives B
+    exactly; for the maps, the neurons nearest A and B. In between, the key and the
+    window's middle frame move along A->B without going back (nearest-neighbour search
+    along a segment is monotone in the projection, class by class)."""
+    clip = synthetic_catalog.load("81_02")
+    before, after = clip.frames(20, 61), clip.frames(100, 140)  # A = 60, B = 100
+    source = synthetic_sources[method]
     a, b = before.posture_deg[-1], after.posture_deg[0]
     positions, middles = [], []
     for alpha in np.linspace(0, 1, 11):
@@ -145,13 +144,21 @@ def test_alpha_moves_the_key_monotonically_from_a_to_b(data_dir, method):
     assert positions[-1] - positions[0] > (0.6 if method in ("upm", "som") else 0.9)
 
 
-def test_key_posture_is_put_on_the_short_turn(data_dir):
-    """A key far round the circle is placed on the turn nearest the alpha-point."""
-    before, after = pair(data_dir, 0)
-    problem = make_problem(before, after, 20, 0.5, sources(data_dir)["classnn"])
+@pytest.mark.parametrize("turns", [0, 2, -3])
+def test_key_posture_is_put_on_the_short_turn(synthetic_catalog, synthetic_sources, turns):
+    """A key far round the circle is placed on the turn nearest the alpha-point: clip 1's
+    lowerneck.rx given as its angle plus ``turns`` whole turns (the same posture), the
+    key follows it there."""
     from upm.transitions.keyposture import key_posture_unwrapped
 
+    before, after = synthetic_pair(synthetic_catalog, 0)
+    dof = CLASS_SLICES["global"].start  # lowerneck.rx
+    shifted = before.posture_deg.copy()
+    shifted[:, dof] += 360.0 * turns
+    problem = make_problem(before.replace(posture_deg=shifted), after, 20, 0.5,
+                           synthetic_sources["classnn"])
     wrapped, continuous = key_posture_unwrapped(problem)
     point = problem.a_deg + 0.5 * (problem.b_deg - problem.a_deg)
     assert np.all(np.abs(continuous - point) <= 180.0)
+    assert abs(continuous[dof] - 360.0 * turns) < 180.0
     np.testing.assert_allclose(angle_diff_deg(continuous, wrapped), 0, atol=1e-9)

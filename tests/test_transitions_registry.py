@@ -6,7 +6,14 @@ import pytest
 
 from upm.core.errors import UsageError
 from upm.transitions import METHODS, TransitionMethod, WindowResult, register
-from upm.transitions.registry import KeySourceContext, build_key_source, unregister
+from upm.transitions.base import ROLES
+from upm.transitions.registry import (
+    KeySourceContext,
+    build_key_source,
+    map_free_methods,
+    methods_with_role,
+    unregister,
+)
 
 NAME = "test-halfway"
 
@@ -46,24 +53,28 @@ def registered():
     assert NAME not in METHODS
 
 
-def test_registered_method_runs_in_transition_and_the_cli(registered, data_dir, tmp_path,
-                                                           catalog):
+def test_registered_method_runs_in_transition_and_the_cli(registered, synthetic_dir,
+                                                           tmp_path, synthetic_catalog):
     from upm.cli import main
+    from upm.motion.amc import read_amc
     from upm.transitions import transition
     from upm.transitions.load import key_source_for
 
+    catalog = synthetic_catalog
     source = key_source_for(NAME, None, catalog)
     assert isinstance(source, _AlphaPoint) and source.built_from is catalog
-    before = catalog.load("02_01").frames(100, 140)
-    after = catalog.load("02_03").frames(20, 60)
+    before = catalog.load("81_01").frames(100, 140)
+    after = catalog.load("81_02").frames(20, 60)
     result = transition(NAME, before, after, 10, 0.5, source)
     assert result.method == NAME and result.diagnostics["built_from_data"] == 1.0
     with pytest.raises(UsageError, match="the test's own source"):
         transition(NAME, before, after, 10, 0.5)
     out = tmp_path / "t.amc"
-    assert main(["transition", "--data", str(data_dir), "--method", NAME, "--from",
-                 "02_01@139", "--to", "02_03@20", "--out", str(out)]) == 0
-    assert out.stat().st_size > 0
+    assert main(["transition", "--data", str(synthetic_dir), "--method", NAME, "--from",
+                 "81_01@139", "--to", "81_02@20", "--frames", "10", "--context", "30",
+                 "--out", str(out)]) == 0
+    written = read_amc(out, catalog.skeleton("81"))
+    assert written.n_frames == 30 + 10 + 30
 
 
 def test_registered_method_runs_in_the_study(registered, data_dir):
@@ -90,12 +101,14 @@ def test_names_are_unique_and_builders_required():
         unregister("upm")
 
 
-def test_a_map_method_without_map_says_so(catalog):
-    with pytest.raises(UsageError, match="needs --map MAP.npz"):
-        build_key_source("feasible", KeySourceContext(catalog=catalog))
+@pytest.mark.parametrize("method", [n for n, m in METHODS.items() if m.needs_map])
+def test_a_map_method_without_map_says_so(synthetic_catalog, method):
+    with pytest.raises(UsageError, match="needs --map MAP.npz") as info:
+        build_key_source(method, KeySourceContext(catalog=synthetic_catalog))
+    assert "classnn" in str(info.value)  # and names the methods that need none
 
 
-def test_a_method_sees_the_windows_root(catalog):
+def test_a_method_sees_the_windows_root(synthetic_catalog):
     """``transition`` hands every method the shared root of its window (a method may check
     its frames against the floor with it): the root the joined motion gets."""
     from upm.transitions import transition
@@ -110,10 +123,51 @@ def test_a_method_sees_the_windows_root(catalog):
     register(TransitionMethod(name=name, solve=solve, continuity="C0", key_kind=NAME,
                               summary="test method", key_source=_build))
     try:
-        before = catalog.load("02_01").frames(100, 140)
-        after = catalog.load("02_03").frames(20, 60)
-        result = transition(name, before, after, 10, 0.5, _AlphaPoint(catalog))
+        before = synthetic_catalog.load("81_01").frames(100, 140)
+        after = synthetic_catalog.load("82_02").frames(20, 60)
+        result = transition(name, before, after, 10, 0.5, _AlphaPoint(synthetic_catalog))
     finally:
         unregister(name)
     assert seen[0].shape == (10, 6)
     np.testing.assert_array_equal(seen[0], result.window_root)
+
+
+def test_get_method_and_register_refuse_clearly():
+    from upm.transitions import get_method
+
+    assert get_method("linear") is METHODS["linear"]
+    with pytest.raises(UsageError, match="no transition method 'wiggle'") as info:
+        get_method("wiggle")
+    assert all(name in str(info.value) for name in METHODS)  # lists what there is
+    with pytest.raises(UsageError, match="takes a TransitionMethod, not dict"):
+        register({"name": "x"})
+    with pytest.raises(UsageError, match="role 'star' is not one of"):
+        TransitionMethod(name="x", solve=_solve, continuity="C0", key_kind=None,
+                         summary="s", role="star")
+    unregister("never-registered")  # nothing to remove: no error
+    assert "never-registered" not in METHODS
+
+
+def test_register_unregister_round_trip(registered):
+    from upm.transitions import get_method
+
+    assert get_method(NAME) is registered and list(METHODS)[-1] == NAME
+    assert registered.needs_key_source and not registered.needs_map
+    assert NAME in map_free_methods()
+
+
+def test_roles_come_from_the_registry():
+    """Every method has one of the roles of ``upm.transitions.base.ROLES``; the roles
+    partition the registry; one method is recommended, one is the paper's (the UPM's)."""
+    assert ROLES == ("recommended", "paper", "paper-comparison", "baseline", "ablation")
+    by_role = {role: methods_with_role(role) for role in ROLES}
+    assert sorted(n for names in by_role.values() for n in names) == sorted(METHODS)
+    assert all(by_role[role] == [n for n in METHODS if METHODS[n].role == role]
+               for role in ROLES)  # in registration (table) order
+    assert len(by_role["recommended"]) == 1 and len(by_role["paper"]) == 1
+    assert METHODS[by_role["paper"][0]].key_kind == "upm"
+    assert by_role["baseline"] and by_role["paper-comparison"]
+    # Whether a method needs --map is a field too, and map_free_methods reads it.
+    assert map_free_methods() == [n for n, m in METHODS.items() if not m.needs_map]
+    assert {n for n, m in METHODS.items() if m.needs_map} == {"upm", "som", "feasible"}
+    assert all(m.needs_key_source for m in METHODS.values() if m.needs_map)

@@ -1,5 +1,6 @@
-"""Shared material for the transition tests: real clip pairs, key-posture sources fitted
-once per process, and the continuity checks of the window's edges."""
+"""Shared material for the transition tests: real clip pairs and synthetic ones
+(tests/synthetic.py), key-posture sources fitted once per process, and the continuity
+checks of the window's edges."""
 
 from __future__ import annotations
 
@@ -20,6 +21,15 @@ PAIRS = (
     ("60_10", 400, "35_01", 50),
     ("135_06", 1500, "141_04", 150),
     ("02_07", 900, "02_05", 700),
+)
+
+#: Synthetic pairs of the ``synthetic_catalog`` fixture, the same layout: a walk into a
+#: run of the shorter subject, a run into a turning walk of the same subject, a turning
+#: walk into a 60 fps walk of the other subject (resampled).
+SYNTHETIC_PAIRS = (
+    ("81_01", 120, "82_02", 20),
+    ("81_02", 100, "81_03", 30),
+    ("81_03", 150, "82_01", 10),
 )
 
 #: Frames of each clip around the join (enough context for every method).
@@ -46,8 +56,17 @@ def sources(data_dir) -> dict:
 
 def pair(data_dir, index: int, frames: int = CLIP_FRAMES):
     """Clip 1 ending at A and clip 2 starting at B of ``PAIRS[index]``."""
-    catalog = catalog_of(data_dir)
-    name1, a, name2, b = PAIRS[index]
+    return _pair(catalog_of(data_dir), PAIRS[index], frames)
+
+
+def synthetic_pair(catalog, index: int, frames: int = CLIP_FRAMES):
+    """Clip 1 ending at A and clip 2 starting at B of ``SYNTHETIC_PAIRS[index]``, from the
+    synthetic folder's ``catalog``."""
+    return _pair(catalog, SYNTHETIC_PAIRS[index], frames)
+
+
+def _pair(catalog, spec, frames):
+    name1, a, name2, b = spec
     before = catalog.load(name1).frames(a + 1 - frames, a + 1)
     after = catalog.load(name2).frames(b, b + frames)
     return before, after
