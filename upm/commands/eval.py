@@ -43,8 +43,10 @@ figures (fig13_window_dof.png, fig14_sequence_dof.png, metrics.png, filmstrip.pn
 
 The default is a reduced study (100 pairs, 20-frame windows: about 2 minutes on 2 cores,
 training the maps included); --full runs the whole protocol (200 pairs, windows of 10,
-20 and 40 frames: about 4 minutes). The pairs of a smaller study are the first pairs of
-a larger one with the same seed, scored identically.
+20 and 40 frames: about 4 minutes). The in-betweening task adds about 40 % to the
+default study (measured on a shared, loaded 2-core machine: 490 s instead of 355 s;
+--inbetween 0 skips it). The pairs of a smaller study are the first pairs of a larger
+one with the same seed, scored identically.
 
 The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
 pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
