@@ -3,10 +3,13 @@
 Deterministic (byte-identical for the same seed, whatever the number of workers):
 
 - ``scores.csv``: every score, long-form (kind, id, window, method, metric, value: every
-  pair x window x method and every real window; :class:`eval.records.Records`);
+  pair x window x method, every real window and, of kind ``inbetween``, every window x
+  length x method of the in-betweening task's LaFAN1 metrics; :class:`eval.records.Records`);
 - ``results.json``: the protocol, the software versions, every metric's definition and
   unit, every test clip, every pair and real window (what they are; their scores are in
   scores.csv), and all the statistics as long-form rows (:meth:`eval.summaries.Summaries.as_json`);
+  ``inbetween``: the in-betweening task's protocol, windows and figures
+  (:func:`eval.inbetween_report.inbetween_document`);
 - ``summary.csv`` (means and intervals), ``paired.csv`` (UPM - X), ``summary.md`` (the
   Markdown tables).
 
@@ -84,10 +87,14 @@ def protocol(result: StudyResult) -> dict:
     }
 
 
-def results_document(result: StudyResult, statistics: Summaries) -> dict:
+def results_document(result: StudyResult, statistics: Summaries,
+                     inbetween: list | None = None) -> dict:
     """``results.json``: every pair and real window, where their scores are, and the
-    statistics (:class:`eval.summaries.Summaries`)."""
-    return {
+    statistics (:class:`eval.summaries.Summaries`); the in-betweening task's section
+    when it ran (``inbetween``: its statistics rows)."""
+    from eval.inbetween_report import inbetween_document
+
+    document = {
         "format": RESULTS_FORMAT,
         "format_version": RESULTS_VERSION,
         "protocol": protocol(result),
@@ -100,6 +107,9 @@ def results_document(result: StudyResult, statistics: Summaries) -> dict:
         "scores": {"file": SCORES_NAME, "columns": list(COLUMNS), "rows": len(result.records)},
         "statistics": statistics.as_json(),
     }
+    if result.inbetween:
+        document["inbetween"] = inbetween_document(result.inbetween, inbetween)
+    return document
 
 
 def machine_info() -> dict:
@@ -246,11 +256,13 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
     -------
     dict
         ``files``: name -> path; ``statistics`` (:class:`eval.summaries.Summaries`);
-        ``timing``; ``figures`` (if drawn); ``physics`` (its statistics, if run).
+        ``inbetween`` (the in-betweening task's statistics rows, empty if it did not
+        run); ``timing``; ``figures`` (if drawn); ``physics`` (its statistics, if run).
     """
     import shutil
     import tempfile
 
+    from eval.inbetween_report import inbetween_markdown, inbetween_statistics
     from eval.summaries import PAIRED_COLUMNS, SUMMARY_COLUMNS, summarise
     from eval.tables import summary_markdown, table4_markdown
 
@@ -261,11 +273,15 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
         config = result.config
         statistics = summarise(result.records, METRICS, result.pairs, result.real,
                                config.methods, config.windows, config.seed)
-        document = results_document(result, statistics)
+        inbetween = (inbetween_statistics(result.records, config.methods, config.seed)
+                     if result.inbetween else [])
+        document = results_document(result, statistics, inbetween)
         markdown = summary_markdown(document, statistics)
+        if result.inbetween:
+            markdown += "\n" + inbetween_markdown(inbetween, len(result.inbetween))
         names = ["results.json", SCORES_NAME, "summary.csv", "paired.csv", "summary.md",
                  "timing.json", "table4.md"]
-        report = {"statistics": statistics}
+        report = {"statistics": statistics, "inbetween": inbetween}
         if physics is not None:
             from eval.physics_report import physics_markdown, plot_physics
 

@@ -19,8 +19,9 @@ from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 
-#: Row kinds: a transition pair, or a real window of a test clip (method ``"real"``).
-KINDS = ("pair", "real")
+#: Row kinds: a transition pair, a real window of a test clip (method ``"real"``), or a
+#: window of the in-betweening task (:mod:`eval.inbetween`; window = length at 30 fps).
+KINDS = ("pair", "real", "inbetween")
 #: The method name of the real-window rows.
 REAL = "real"
 COLUMNS = ("kind", "id", "window", "method", "metric", "value")

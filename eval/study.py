@@ -4,10 +4,12 @@ the humanoid, and the real windows that calibrate the scores (SPEC section 7).
 :func:`run_study` trains (or takes from the cache) the UPM and the SOM on the train split,
 fits the two ablations (``classnn``, ``snap``) on the same postures, draws the pairs
 (:mod:`eval.pairs`), and scores every method x window of every pair and every real window
-(:func:`eval.scoring.score_window`), in parallel over pairs through an executor
-(:mod:`eval.executor`: a local process pool, or Ray). The scores go into one long-form
-table (:class:`eval.records.Records`: pair or real window, window length, method, metric,
-value) with the metric registry :data:`eval.metrics.METRICS`. They do not depend on the
+(:func:`eval.scoring.score_window`), and the in-betweening task's windows (the LaFAN1
+metrics, :mod:`eval.inbetween`), in parallel through an executor (:mod:`eval.executor`:
+a local process pool, or Ray). The scores go into one long-form table
+(:class:`eval.records.Records`: pair, real or in-betweening window, window length,
+method, metric, value; :func:`eval.collect.collect`) with the registry
+:data:`eval.collect.SCORE_METRICS`. They do not depend on the
 number of workers: each task is a pure function of its pair, and the table sorts its rows.
 BLAS runs single-threaded in every process (the arrays are small; with several threads
 the spacetime optimisation ran up to 30x slower on a loaded machine).
@@ -18,7 +20,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-from eval.metrics import METRICS, pose_distance_rms_deg
+from eval.inbetween import INBETWEEN
 from eval.pairs import (
     Pair,
     RealWindow,
@@ -27,7 +29,7 @@ from eval.pairs import (
     exclusion_zones,
     real_exclusion_zone,
 )
-from eval.records import REAL, Records
+from eval.records import Records
 from eval.runs import default_workers, single_threaded_blas
 from upm.transitions import METHODS
 
@@ -51,6 +53,9 @@ class StudyConfig:
         Window lengths L, frames at 120 fps.
     seed : int
     methods : tuple of str
+    inbetween : int or None
+        Windows of the in-betweening task (:mod:`eval.inbetween`): None for as many as
+        pairs, 0 for none.
     """
 
     data_dir: str
@@ -58,10 +63,16 @@ class StudyConfig:
     windows: tuple[int, ...] = (20,)
     seed: int = 0
     methods: tuple[str, ...] = STUDY_METHODS
+    inbetween: int | None = None
+
+    @property
+    def inbetween_windows(self) -> int:
+        return self.pairs if self.inbetween is None else self.inbetween
 
     def as_dict(self) -> dict:
         return {"pairs": self.pairs, "windows": list(self.windows), "seed": self.seed,
-                "methods": list(self.methods), "alpha": ALPHA}
+                "methods": list(self.methods), "alpha": ALPHA,
+                "inbetween_windows": self.inbetween_windows}
 
 
 @dataclass
@@ -81,6 +92,8 @@ class StudyData:
         By method, for the methods that have one.
     train_subjects : frozenset of str
         Subjects with at least one clip in the train split.
+    position_std : ndarray, shape (22, 3), or None
+        The in-betweening task's L2P normalisation (None without the task).
     """
 
     config: StudyConfig
@@ -90,6 +103,7 @@ class StudyData:
     real: object
     sources: dict
     train_subjects: frozenset
+    position_std: object = None
     models: dict = field(default_factory=dict)
 
     def model(self, clip: str):
@@ -134,6 +148,10 @@ def prepare(config: StudyConfig, progress: bool = False) -> StudyData:
         sources=key_sources(catalog, config.methods, progress),
         train_subjects=frozenset(catalog.info(n).subject for n in catalog.names("train")),
     )
+    if config.inbetween_windows:
+        from eval.inbetween import cached_position_std
+
+        data.position_std = cached_position_std(catalog)
     _warm_up(data)
     return data
 
@@ -211,12 +229,19 @@ def _init_worker(config: StudyConfig) -> None:
 
 
 def _task(kind: str, item):
+    if kind == INBETWEEN:
+        from eval.inbetween import score_window
+
+        return kind, {"index": item.index, "scores": score_window(
+            _DATA, item, _DATA.position_std, _DATA.config.methods, ALPHA)}
     return kind, (score_pair(_DATA, item) if kind == "pair" else score_real(_DATA, item))
 
 
 def _task_key(kind: str, item) -> str:
-    """``pair/ID`` or ``real/L/ID``: what a failed task is reported as."""
-    return f"pair/{item.index}" if kind == "pair" else f"real/{item.frames}/{item.index}"
+    """``pair/ID``, ``real/L/ID`` or ``inbetween/ID``: what a failed task is reported as."""
+    if kind in ("pair", INBETWEEN):
+        return f"{kind}/{item.index}"
+    return f"real/{item.frames}/{item.index}"
 
 
 # --- the study ----------------------------------------------------------------------------
@@ -230,8 +255,10 @@ class StudyResult:
     ----------
     config : StudyConfig
     records : eval.records.Records
-        Every score, long-form: ``pair`` rows (id, L, method, metric, value) and ``real``
-        rows (id, L, ``"real"``, metric, value), metrics from :data:`eval.metrics.METRICS`.
+        Every score, long-form: ``pair`` rows (id, L, method, metric, value), ``real``
+        rows (id, L, ``"real"``, metric, value), metrics from :data:`eval.metrics.METRICS`,
+        and ``inbetween`` rows (id, length at 30 fps, method or baseline, metric, value),
+        metrics from :data:`eval.inbetween.INBETWEEN_METRICS`.
     pairs : list of dict
         Per pair (sorted by id): ``id``, ``first``/``second`` segments, ``subjects``,
         ``ab_distance_deg`` (A to B, RMS over the declared DOFs), ``seen`` (both
@@ -246,6 +273,8 @@ class StudyResult:
     train_subjects : list of str
     timing_ms : dict
         ``{L: {method: [ms per pair, by pair id]}}`` (not deterministic: kept apart).
+    inbetween : list of eval.pairs.RealWindow
+        The in-betweening task's windows (their scores: ``inbetween`` rows of records).
     wall_s : float
     workers : int
     data : StudyData
@@ -262,6 +291,7 @@ class StudyResult:
     wall_s: float
     workers: int
     data: StudyData
+    inbetween: list = field(default_factory=list)
 
 
 def run_study(config: StudyConfig, workers: int | None = None,
@@ -292,7 +322,7 @@ def run_study(config: StudyConfig, workers: int | None = None,
     eval.physics.StudyIncomplete
         If a task failed (each named): nothing is returned half-done.
     """
-    from eval.realdata import FLAT_FLOOR_MAX_BW, floor_residuals
+    from eval.collect import collect
     from upm.core.progress import progress
     from upm.transitions import METHODS
 
@@ -309,7 +339,13 @@ def run_study(config: StudyConfig, workers: int | None = None,
     pairs = draw_pairs(data.lengths, config.pairs, config.seed)
     real = {frames: draw_real_windows(data.lengths, config.pairs, frames, config.seed)
             for frames in config.windows}
+    inbetween = []
+    if config.inbetween_windows:
+        from eval.inbetween import draw_windows
+
+        inbetween = draw_windows(data.lengths, config.inbetween_windows, config.seed)
     tasks = [("pair", p) for p in pairs] + [("real", w) for ws in real.values() for w in ws]
+    tasks += [(INBETWEEN, w) for w in inbetween]
     workers = min(workers or default_workers(), len(tasks))
 
     from eval.executor import make_executor
@@ -333,48 +369,10 @@ def run_study(config: StudyConfig, workers: int | None = None,
         raise StudyIncomplete(f"{len(failures)} of {len(tasks)} study tasks failed "
                               f"(first: {failures[0]}); nothing was written")
 
-    floor = floor_residuals(data.catalog, data.motions)
-    clips = {name: {"subject": data.subject(name), "frames": data.lengths[name],
-                    "seen": data.subject(name) in data.train_subjects,
-                    "floor_residual_median_bw": floor[name],
-                    "flat_floor": floor[name] < FLAT_FLOOR_MAX_BW}
-             for name in data.motions}
-    records = Records(METRICS)
-    for kind, outcome in done:
-        if kind == "pair":
-            for frames, method, values in outcome["scores"]:
-                records.add("pair", outcome["index"], frames, method, values)
-        else:
-            records.add(REAL, outcome["index"], outcome["frames"], REAL, outcome["scores"])
-    by_pair = {r["index"]: r for kind, r in done if kind == "pair"}
-    pair_records = [_pair_record(data, p, by_pair[p.index], clips) for p in pairs]
-    timing = {frames: {m: [by_pair[p.index]["ms"][frames][m] for p in pairs]
-                       for m in config.methods} for frames in config.windows}
-    real_records = {frames: [{"id": w.index, "clip": w.clip, "start": w.start, "stop": w.stop,
-                              "flat_floor": clips[w.clip]["flat_floor"]} for w in ws]
-                    for frames, ws in real.items()}
-    return StudyResult(config=config, records=records, pairs=pair_records, real=real_records,
-                       clips=clips, train_subjects=sorted(data.train_subjects),
-                       timing_ms=timing, wall_s=time.perf_counter() - start, workers=workers,
-                       data=data)
-
-
-def _pair_record(data: StudyData, pair: Pair, outcome: dict, clips: dict) -> dict:
-    a = data.motions[pair.first.clip].posture_deg[pair.first.stop - 1]
-    b = data.motions[pair.second.clip].posture_deg[pair.second.start]
-    dofs = data.real.dofs
-    subjects = [data.subject(pair.first.clip), data.subject(pair.second.clip)]
-    return {
-        "id": pair.index,
-        "first": pair.first.as_dict(),
-        "second": pair.second.as_dict(),
-        "subjects": subjects,
-        "ab_distance_deg": round(float(pose_distance_rms_deg(a[dofs], b[dofs])), 6),
-        "seen": all(s in data.train_subjects for s in subjects),
-        "end_self_collision": outcome["end_self_collision"],
-        "flat_floor": clips[pair.first.clip]["flat_floor"] and clips[pair.second.clip][
-            "flat_floor"],
-    }
+    return StudyResult(config=config, **collect(data, pairs, real, done),
+                       train_subjects=sorted(data.train_subjects),
+                       wall_s=time.perf_counter() - start, workers=workers, data=data,
+                       inbetween=inbetween)
 
 
 def pair_by_id(result: StudyResult, index: int) -> Pair:

@@ -1,7 +1,7 @@
-"""Tables of the study: ``summary.md`` (the Markdown tables), the terminal headline and
-``table4.md`` (the paper's Table 4: milliseconds per transition and the spacetime / UPM
-ratio). The CSVs are the long-form tables themselves (:mod:`eval.summaries`,
-:func:`eval.records.csv_text`).
+"""Tables of the study: ``summary.md`` (the Markdown tables) and ``table4.md`` (the
+paper's Table 4: milliseconds per transition and the spacetime / UPM ratio); the
+terminal's are in :mod:`eval.console`. The CSVs are the long-form tables themselves
+(:mod:`eval.summaries`, :func:`eval.records.csv_text`).
 
 Every table but Table 4 reads the study's :class:`eval.summaries.Summaries` (one lookup
 per cell, a misspelt metric refused by name), so it is byte-identical for the same seed;
@@ -331,33 +331,3 @@ def table4_markdown(timing: dict) -> str:
         f"figures).",
         "",
     ])
-
-
-def headline_rows(statistics: Summaries, timing: dict, frames: int, methods) -> list[dict]:
-    """The headline for one window: feasible, UPM, linear, the best other baseline and
-    the real windows, each with the headline metrics (mean, lo, hi) and ms per transition."""
-    best = best_baseline(statistics, frames, methods)
-    names = [m for role in ("recommended", "paper", "paper-comparison")
-             for m in methods_with_role(role) if m in methods] + (
-        [best] if best else [])
-    out = []
-    for name in names + [REAL]:
-        entry = {"method": name if name != REAL else "real windows"}
-        for metric in HEADLINE:
-            entry[metric] = statistics.interval(frames, name, metric)
-        ms = timing["ms"][str(frames)].get(name) if name != REAL else None
-        entry["ms_median"] = ms["median"] if ms else None
-        out.append(entry)
-    return out
-
-
-def headline_text(statistics: Summaries, timing: dict, frames: int, methods) -> str:
-    """The headline as a plain-text table for the terminal."""
-    rows = headline_rows(statistics, timing, frames, methods)
-    header = ["method"] + [DISPLAY[m][2] for m in HEADLINE] + ["ms"]
-    cells = [[r["method"]] + [cell(m, r[m]) for m in HEADLINE]
-             + ["-" if r["ms_median"] is None else f"{r['ms_median']:.2f}"] for r in rows]
-    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(header)]
-    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
-    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
-    return "\n".join(lines)

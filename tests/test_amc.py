@@ -136,6 +136,47 @@ def test_malformed_amc(tmp_path, tiny, text, message, line):
     assert info.value.line == line
 
 
+CUT_AT = GOOD[: GOOD.rindex("lowerback")]  # the last frame, cut before its lowerback line
+TWELVE = make_amc([frame() for _ in range(12)])
+
+
+@pytest.mark.parametrize("text, message, line", [
+    (CUT_AT + "lo", "looks truncated: its last line ends in 'lo', the start of a bone name "
+                    "('lowerback'?)", 14),
+    (CUT_AT + "lo\n\n  \n", "looks truncated: its last line ends in 'lo'", 14),
+    (CUT_AT + "lowerback 1 2", "looks truncated: its last line ends after 2 of the 3 values "
+                               "of bone 'lowerback'", 14),
+    (CUT_AT + "lowerback", "after 0 of the 3 values", 14),
+    (TWELVE[: TWELVE.rindex("\n12\n") + 2], "looks truncated: its last line ends in frame "
+                                             "number 1 (expected 12)", 48),
+])
+def test_amc_cut_mid_line_is_said_to_be_truncated(tmp_path, tiny, text, message, line):
+    path = tmp_path / "cut.amc"
+    path.write_text(text)
+    with pytest.raises(DataFileError) as info:
+        read_amc(path, tiny)
+    assert message in str(info.value)
+    assert str(path) in str(info.value) and "another skeleton" not in str(info.value)
+    assert info.value.line == line
+
+
+@pytest.mark.parametrize("text, message, line", [
+    # the start of a bone name, but not on the last line: a wrong name, not a cut
+    (GOOD.replace("lowerback 1 2 3", "lo", 1), "unknown bone 'lo' (not in tiny.asf", 6),
+    (GOOD.replace("lowerback 1 2 3", "lowerback 1 2", 1), "needs 3 values, found 2", 6),
+    # the last line, but not the start of any bone name
+    (CUT_AT + "xy", "unknown bone 'xy' (not in tiny.asf: does this AMC belong to another", 14),
+])
+def test_amc_wrong_line_not_at_the_end_is_not_called_truncated(tmp_path, tiny, text, message,
+                                                               line):
+    path = tmp_path / "bad.amc"
+    path.write_text(text)
+    with pytest.raises(DataFileError) as info:
+        read_amc(path, tiny)
+    assert message in str(info.value) and "truncated" not in str(info.value)
+    assert info.value.line == line
+
+
 def test_amc_of_another_skeleton(synthetic_dir, tiny):
     expected = "bone 'upperback' has values but no dofs in tiny.asf.*another skeleton"
     with pytest.raises(DataFileError, match=expected):

@@ -1,14 +1,20 @@
 """``upm eval`` end to end on a small study (3 pairs, 10-frame windows, every method): the
 files, every method x metric for every pair in the long-form scores.csv (read back with
-int windows), the calibration row, the figures; the same seed gives byte-identical results
-with 2 worker processes and with none; bad arguments are one-line errors."""
+int windows), the calibration row, the in-betweening task's LaFAN1 figures, the figures;
+the same seed gives byte-identical results with 2 worker processes and with none; what
+it prints fits 100 columns and names every method; bad arguments are one-line errors."""
 
+import contextlib
+import io
 import json
 
 import mujoco
 import numpy as np
 import pytest
 
+from eval.collect import SCORE_METRICS
+from eval.inbetween import INBETWEEN, INBETWEEN_METRICS
+from eval.lafan import BASELINES, LAFAN_LENGTHS
 from eval.metrics import HEADLINE, METRICS
 from eval.records import REAL, Records
 from eval.study import STUDY_METHODS
@@ -25,7 +31,10 @@ def _run(data_dir, out, *extra):
 @pytest.fixture(scope="module")
 def study(tmp_path_factory, data_dir):
     out = tmp_path_factory.mktemp("eval")
-    assert _run(data_dir, out / "two", "--workers", "2") == 0
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert _run(data_dir, out / "two", "--workers", "2") == 0
+    (out / "two.txt").write_text(printed.getvalue())
     assert _run(data_dir, out / "one", "--workers", "1", "--no-figures") == 0
     return out
 
@@ -47,7 +56,7 @@ def test_same_seed_same_bytes_whatever_the_workers(study):
 
 
 def _scores(folder) -> Records:
-    return Records.from_csv((folder / "scores.csv").read_text(), METRICS, "scores.csv")
+    return Records.from_csv((folder / "scores.csv").read_text(), SCORE_METRICS, "scores.csv")
 
 
 def test_results_hold_every_pair_method_and_metric(study):
@@ -62,8 +71,11 @@ def test_results_hold_every_pair_method_and_metric(study):
         assert pair["first"]["stop"] - pair["first"]["start"] in (173, 200)
     scores = _scores(study / "two")
     per_unit = len(METRICS)
-    assert len(scores) == results["scores"]["rows"] == (3 * len(STUDY_METHODS) + 3) * per_unit
-    assert {row[2] for row in scores.rows()} == {10}  # the window read back as an int
+    inbetween = 3 * len(LAFAN_LENGTHS) * (len(STUDY_METHODS) + len(BASELINES))
+    assert len(scores) == results["scores"]["rows"] == (
+        (3 * len(STUDY_METHODS) + 3) * per_unit + inbetween * len(INBETWEEN_METRICS))
+    # the windows read back as ints
+    assert {row[2] for row in scores.rows() if row[0] != INBETWEEN} == {10}
     for method in STUDY_METHODS:
         assert scores.ids("pair", 10, method) == [0, 1, 2]
         for metric in METRICS:
@@ -77,6 +89,47 @@ def test_results_hold_every_pair_method_and_metric(study):
     assert results["software"]["mujoco"] == mujoco.__version__
     assert {c: results["clips"][c]["seen"] for c in ("16_15", "05_11")} == {
         "16_15": False, "05_11": True}
+
+
+def test_inbetween_task_scores_every_method_and_baseline(study):
+    scores = _scores(study / "two")
+    results = json.loads((study / "two" / "results.json").read_text())
+    section = results["inbetween"]
+    assert [w["id"] for w in section["windows"]] == [0, 1, 2]
+    assert set(section["metrics"]) == set(INBETWEEN_METRICS)
+    for length in LAFAN_LENGTHS:
+        misses = set()
+        for method in (*STUDY_METHODS, *BASELINES):
+            assert scores.ids(INBETWEEN, length, method) == [0, 1, 2]
+            for metric in INBETWEEN_METRICS:
+                values = scores.values(INBETWEEN, length, method, metric)
+                assert np.isfinite(values).all() and (values >= 0).all(), (method, metric)
+            if method not in BASELINES:
+                misses.add(tuple(scores.values(INBETWEEN, length, method, "target_miss_m")))
+            else:
+                assert (scores.values(INBETWEEN, length, method, "target_miss_m") == 0).all()
+        assert len(misses) == 1  # every study method gets the same root
+    rows = {(r["length"], r["method"], r["metric"]) for r in section["statistics"]}
+    assert {(5, "interp", "npss"), (30, "upm", "l2p"), (15, "zerovel", "l2q")} <= rows
+    table = (study / "two" / "summary.md").read_text()
+    assert "In-betweening: the LaFAN1 metrics" in table and "comparable in kind" in table
+
+
+def test_what_it_prints_fits_100_columns_and_names_every_method(study):
+    printed = (study / "two.txt").read_text().splitlines()
+    assert max(len(line) for line in printed) <= 100
+    start = next(i for i, line in enumerate(printed) if line.startswith("method "))
+    headline = printed[start:start + len(STUDY_METHODS) + 2]
+    assert [line.split()[0] for line in headline[1:-1]] == list(STUDY_METHODS)
+    assert headline[-1].startswith("real windows")
+    text = "\n".join(printed)
+    assert "ms: median milliseconds to compute one transition" in text
+    for name in ("summary.md", "summary.csv", "scores.csv", "results.json", "table4.md"):
+        assert name in text
+    lafan = next(i for i, line in enumerate(printed) if line.startswith("method  ")
+                 and "L2Q@5" in line)
+    assert [line.split()[0] for line in printed[lafan + 1:lafan + 12]] == [
+        *STUDY_METHODS, *BASELINES]
 
 
 def test_calibration_row_exists(study):
@@ -130,6 +183,7 @@ def test_figures_name_their_example(study):
     (["--pairs", "1"], "--pairs"),
     (["--methods", "upm", "cubic"], "no transition method 'cubic'"),
     (["--methods", "upm", "som"], "figures compare upm with linear"),
+    (["--inbetween", "-1"], "--inbetween must be 0 (skip) or more windows, not -1"),
 ])
 def test_bad_arguments_are_one_line_errors(args, message, tmp_path, data_dir, capsys):
     code = main(["eval", "--data", str(data_dir), "--out", str(tmp_path / "o"), *args])

@@ -24,8 +24,18 @@ walk, the step-up and the 60 fps jumps need about one body weight in the real da
 alone). Tracking: the humanoid's servos (human torque limits) follow each window with the
 root driven along it.
 
-The output directory gets scores.csv (every score, long-form: kind, id, window, method,
-metric, value), results.json (protocol, pairs, statistics), summary.csv, paired.csv,
+The in-betweening task (--inbetween N windows, default as many as pairs, 0 to skip) gives
+the literature's figures: every method and the LaFAN1 protocol's two baselines (zerovel,
+interp) fill held-out windows of the test clips (10 frames of context at 30 fps, the
+target after transitions of 5, 15 and 30 frames) and are scored against the recorded
+frames with L2Q, L2P and NPSS as Harvey et al. 2020 define them. The data are CMU's, not
+LaFAN1's: the figures compare with the literature's in kind, not in value.
+
+The terminal gets the headline (every method, the means of the headline metrics, ms per
+transition), the UPM - linear verdicts and the in-betweening figures; the output
+directory gets scores.csv (every score, long-form: kind, id, window, method, metric,
+value; the in-betweening rows of kind inbetween), results.json (protocol, pairs,
+statistics, the in-betweening section), summary.csv, paired.csv,
 summary.md (means with 95 % bootstrap intervals, UPM - X paired, by A-B distance
 tercile, by seen/unseen subject, flat floor), table4.md + timing.json (ms per transition,
 spacetime / UPM: these vary by run, the rest is identical for the same seed) and the
@@ -33,8 +43,10 @@ figures (fig13_window_dof.png, fig14_sequence_dof.png, metrics.png, filmstrip.pn
 
 The default is a reduced study (100 pairs, 20-frame windows: about 2 minutes on 2 cores,
 training the maps included); --full runs the whole protocol (200 pairs, windows of 10,
-20 and 40 frames: about 4 minutes). The pairs of a smaller study are the first pairs of
-a larger one with the same seed, scored identically.
+20 and 40 frames: about 4 minutes). The in-betweening task adds about 40 % to the
+default study (measured on a shared, loaded 2-core machine: 490 s instead of 355 s;
+--inbetween 0 skips it). The pairs of a smaller study are the first pairs of a larger
+one with the same seed, scored identically.
 
 The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
 pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
@@ -81,6 +93,9 @@ def configure(parser) -> None:
                              f"{','.join(map(str, DEFAULT_WINDOWS))}; --full: "
                              f"{','.join(map(str, FULL_WINDOWS))})")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--inbetween", type=int, metavar="N", default=None,
+                        help="windows of the in-betweening task (the LaFAN1 metrics L2Q, "
+                             "L2P, NPSS; default: as many as --pairs; 0: skip it)")
     parser.add_argument("--methods", nargs="+", metavar="M", default=None,
                         help="methods to run (default: all; upm is needed for the paired "
                              "comparisons and figures)")
@@ -124,9 +139,9 @@ def run(args) -> int:
     import sys
     from pathlib import Path
 
+    from eval.console import headline_text, legend
     from eval.outputs import figure_window, write_outputs
     from eval.study import STUDY_METHODS, StudyConfig, run_study
-    from eval.tables import headline_text
     from upm.core.errors import UsageError
     from upm.motion.catalog import Catalog
     from upm.transitions import get_method
@@ -135,6 +150,8 @@ def run(args) -> int:
                                                        else DEFAULT_PAIRS)
     if pairs < 2:
         raise UsageError(f"--pairs must be at least 2, not {pairs}")
+    if args.inbetween is not None and args.inbetween < 0:
+        raise UsageError(f"--inbetween must be 0 (skip) or more windows, not {args.inbetween}")
     windows = parse_windows(args.windows, FULL_WINDOWS if args.full else DEFAULT_WINDOWS)
     methods = tuple(args.methods) if args.methods else STUDY_METHODS
     for method in methods:
@@ -163,9 +180,10 @@ def run(args) -> int:
         import_ray()
     catalog = Catalog(args.data)
     config = StudyConfig(data_dir=str(catalog.root), pairs=pairs, windows=windows,
-                         seed=args.seed, methods=methods)
+                         seed=args.seed, methods=methods, inbetween=args.inbetween)
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
-          f"{','.join(map(str, windows))}, seed {args.seed}", file=sys.stderr)
+          f"{','.join(map(str, windows))}, seed {args.seed}; in-betweening: "
+          f"{config.inbetween_windows} windows", file=sys.stderr)
     from eval.executor import executor_session
     from eval.runs import default_workers
 
@@ -185,8 +203,8 @@ def run(args) -> int:
         physics.checkpoint.remove()
 
     frames = figure_window(windows)
-    print(f"Held-out study: {pairs} pairs, window {frames} frames at 120 fps "
-          f"(mean [95 % interval]; {result.workers} workers, {result.wall_s:.0f} s)")
+    print(f"Held-out study: {pairs} pairs, window {frames} frames at 120 fps, means "
+          f"({result.workers} workers, {result.wall_s:.0f} s)")
     print(headline_text(report["statistics"], report["timing"], frames, methods))
     statistics = report["statistics"]
     if "linear" in statistics.compared(frames):
@@ -201,6 +219,15 @@ def run(args) -> int:
     ratio = report["timing"]["spacetime_over_upm"].get(str(frames))
     if ratio is not None:
         print(f"spacetime / UPM time per transition: {ratio:.1f}x (Table 4: table4.md)")
+    if report["inbetween"]:
+        from eval.inbetween_report import inbetween_text
+
+        print("\n".join(legend([
+            f"In-betweening, the LaFAN1 metrics (Harvey et al. 2020; lower is better): "
+            f"{len(result.inbetween)} held-out windows, transitions of 5, 15 and 30 frames "
+            "at 30 fps, zerovel and interp the protocol's baselines, NPSS pooled; CMU data, "
+            "not LaFAN1's: comparable in kind, not in value"])))
+        print(inbetween_text(report["inbetween"]))
     if physics is not None:
         from eval.physics_report import physics_text
 
@@ -209,7 +236,11 @@ def run(args) -> int:
               f"{physics.wall_s:.0f} s" + (f", {physics.resumed} runs resumed" if
                                            physics.resumed else "") + "):")
         print(physics_text(physics.statistics, frames, methods))
-    print(f"written to {out}/: results.json, scores.csv, summary.csv, paired.csv, summary.md, "
-          f"timing.json, table4.md" + (", physics.csv" if physics is not None else "")
-          + (", figures (*.png)" if args.figures else ""))
+    print("\n".join(legend([
+        f"Written to {out}/: summary.md (every table with 95 % intervals: all the metrics, "
+        "the paired tests by group, the calibration per clip, the in-betweening figures), "
+        "summary.csv and paired.csv (the same, long-form), scores.csv (every score), "
+        "results.json (protocol and definitions), table4.md and timing.json (ms)"
+        + (", physics.csv" if physics is not None else "")
+        + (", the figures (*.png)" if args.figures else "")])))
     return 0

@@ -113,7 +113,9 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
         a file over :data:`MAX_AMC_BYTES`, a wrong number of values, a non-numeric,
         NaN or infinite value or one beyond
         :data:`MAX_ABS_VALUE`, a frame number that is not 1 to 9 ASCII digits, frame
-        numbers out of order, a truncated last frame, no frames at all.
+        numbers out of order, a truncated last frame, no frames at all. A file cut
+        mid-line (its last line the start of a bone name or of the next frame number,
+        or a bone with too few values) is said to look truncated.
     """
     layout = ChannelLayout(skeleton)
     n_bones = len(layout.bones)
@@ -143,7 +145,8 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
         values.extend(row)
         frame_lines.append(frame_line)
 
-    for lineno, raw in iter_text_lines(path, "AMC", max_bytes=MAX_AMC_BYTES):
+    lines = iter_text_lines(path, "AMC", max_bytes=MAX_AMC_BYTES)
+    for lineno, raw in lines:
         n_lines = lineno
         parts = raw.split()
         if not parts or parts[0].startswith("#"):
@@ -164,6 +167,9 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
                 close_frame(lineno)
                 n_frames += 1
                 if number != frame_number + 1:
+                    if str(frame_number + 1).startswith(head) and _at_end(lines):
+                        raise _truncated(path, f"in frame number {head} (expected "
+                                               f"{frame_number + 1})", lineno)
                     raise DataFileError(path, f"frame {number} follows frame {frame_number} "
                                               f"(expected {frame_number + 1})", lineno)
             frame_number, frame_line = number, lineno
@@ -180,6 +186,10 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
             if head in skeleton.bone_names:
                 raise DataFileError(path, f"bone {head!r} has values but no dofs in {asf_name} "
                                           "(does this AMC belong to another skeleton?)", lineno)
+            if any(b.startswith(head) for b in skeleton.bone_names) and _at_end(lines):
+                known = next(b for b in skeleton.bone_names if b.startswith(head))
+                raise _truncated(path, f"in {head!r}, the start of a bone name ({known!r}?)",
+                                 lineno)
             raise DataFileError(path, f"unknown bone {head[:40]!r} (not in {asf_name}: does "
                                       "this AMC belong to another skeleton?)", lineno)
         if head in seen:
@@ -188,6 +198,9 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
         seen.add(head)
         column, count = entry
         if len(parts) - 1 != count:
+            if len(parts) - 1 < count and _at_end(lines):
+                raise _truncated(path, f"after {len(parts) - 1} of the {count} values of "
+                                       f"bone {head!r}", lineno)
             raise DataFileError(path, f"bone {head!r} needs {count} values, found "
                                       f"{len(parts) - 1}", lineno)
         try:
@@ -205,6 +218,16 @@ def read_amc(path: str | os.PathLike, skeleton: Skeleton, fps: float = 120.0,
     _check_values(path, layout, table, frame_lines)
     label = name if name is not None else os.path.splitext(os.path.basename(path))[0]
     return _to_motion(skeleton, layout, table, fps, radians, label)
+
+
+def _at_end(rest_of_file) -> bool:
+    """Whether only blank lines are left (``rest_of_file``: the line iterator; read up to
+    its next non-blank line, which is harmless as the file is being refused anyway)."""
+    return all(not line.strip() for _, line in rest_of_file)
+
+
+def _truncated(path, what: str, lineno: int) -> DataFileError:
+    return DataFileError(path, f"the file looks truncated: its last line ends {what}", lineno)
 
 
 def _check_values(path, layout: ChannelLayout, table: np.ndarray, frame_lines) -> None:
