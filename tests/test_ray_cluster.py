@@ -7,7 +7,8 @@ The drivers are ``upm eval`` processes that get the token the way a user has it 
 in RAY_AUTH_TOKEN_PATH, RAY_AUTH_MODE unset). The README's command, through Ray Client, is
 stopped by SIGTERM once a free-root run is in the checkpoint, then completed through the
 head's GCS address; the outputs equal the local pool's byte for byte and hold no token. A
-missing or wrong token is one line naming the fix.
+missing or wrong token is one line naming the fix. (One test for the one head: pytest-xdist
+would start a head for each worker that runs a test of the module.)
 """
 
 from __future__ import annotations
@@ -175,16 +176,18 @@ def _upm(*args, env, timeout=STUDY_S) -> subprocess.CompletedProcess:
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
 
 
-@pytest.mark.parametrize("form, token", [("client", "missing"), ("gcs", "wrong")])
-def test_a_missing_or_wrong_token_is_one_line_with_the_fix(ray_head, tmp_path, form, token):
-    env = dict(ray_head.env)
+def _token_error(head: Head, tmp_path: Path, form: str, token: str) -> None:
+    """A driver with the token missing or wrong: one line naming the address and the fix,
+    exit 2, nothing written, no token shown."""
+    tmp_path.mkdir()
+    env = dict(head.env)
     if token == "missing":
         del env["RAY_AUTH_TOKEN_PATH"]
         env["HOME"] = str(tmp_path / "home")  # no ~/.ray/auth_token either
     else:
         (tmp_path / "other").write_text(secrets.token_hex(32))
         env["RAY_AUTH_TOKEN_PATH"] = str(tmp_path / "other")
-    address = ray_head.client if form == "client" else ray_head.gcs
+    address = head.client if form == "client" else head.gcs
     out = tmp_path / "out"
     done = _upm("eval", *STUDY, "--executor", "ray", "--address", address, "--out", str(out),
                 env=env, timeout=120)
@@ -195,7 +198,7 @@ def test_a_missing_or_wrong_token_is_one_line_with_the_fix(ray_head, tmp_path, f
                 else "the cluster refused the authentication token from RAY_AUTH_TOKEN_PATH")
     assert expected in err and "ray get-auth-token" in err
     assert not out.exists()
-    assert ray_head.token not in done.stdout + done.stderr
+    assert head.token not in done.stdout + done.stderr
 
 
 def _lines(path: Path) -> list[str]:
@@ -203,6 +206,10 @@ def _lines(path: Path) -> list[str]:
 
 
 def test_the_readme_command_on_a_cluster_started_on_its_own(ray_head, data_dir, tmp_path):
+    # Without the token, or with another one: refused, one line each.
+    _token_error(ray_head, tmp_path / "missing", "client", "missing")
+    _token_error(ray_head, tmp_path / "wrong", "gcs", "wrong")
+
     study = ["eval", "--data", str(data_dir), *STUDY]
     local, cluster = tmp_path / "local", tmp_path / "cluster"
     done = _upm(*study, "--workers", "2", "--out", str(local), env=ray_head.env)

@@ -51,7 +51,8 @@ one with the same seed, scored identically.
 The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
 pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
 the pairs get it. It runs on a local process pool, or on Ray (--executor ray: a local
-Ray instance, or an existing cluster with --address). Finished runs are kept in
+Ray instance, or an existing cluster with --address ray://HEAD:10001 or HEAD:6379:
+docs/guides/ray-cluster.md). Ctrl-C or SIGTERM stops it at any time. Finished runs are kept in
 OUT/physics-partial.jsonl as they come: if runs fail or the command is stopped, the
 same command completes only what is missing.
 
