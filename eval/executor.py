@@ -9,15 +9,23 @@ arguments, and callers order the outcomes by key.
 - :class:`LocalExecutor`: ``concurrent.futures.ProcessPoolExecutor`` (fork where the
   platform has it, so loaded data is shared), or this process for one worker.
 - :class:`RayExecutor`: `Ray <https://docs.ray.io>`_ tasks — an existing cluster at
-  ``address`` (``ray://host:10001`` or ``host:6379``), else a local Ray instance with
-  ``workers`` CPUs, shut down afterwards. A task whose worker process dies is retried by
-  Ray (:data:`RAY_RETRIES`); a task that raises is reported, not retried (the study's
-  tasks are deterministic: the same error would come again).
+  ``address`` (``ray://host:10001`` or ``host:6379``: :mod:`eval.ray_cluster` checks it
+  and the token first), else a local Ray instance with ``workers`` CPUs, shut down
+  afterwards. A task whose worker process dies is retried by Ray (:data:`RAY_RETRIES`); a
+  task that raises is reported, not retried (the study's tasks are deterministic: the same
+  error would come again).
+
+Stopping: a command's :func:`executor_session` turns SIGTERM into KeyboardInterrupt (as
+Ctrl-C), so that a stop at any moment unwinds: the checkpoint of finished units is closed
+(:mod:`eval.runs`), the local pool's processes are killed, Ray's pending tasks cancelled
+and its connection shut down.
 """
 
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -26,6 +34,8 @@ from dataclasses import dataclass
 EXECUTORS = ("local", "ray")
 #: Retries of a Ray task whose worker process died (machine lost, out of memory).
 RAY_RETRIES = 2
+#: Seconds each wait for a Ray task may block (signals are handled between waits).
+RAY_WAIT_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -88,15 +98,33 @@ class LocalExecutor:
 
         methods = multiprocessing.get_all_start_methods()
         context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-        with ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)),
-                                 mp_context=context, initializer=self.initializer,
-                                 initargs=self.initargs) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)),
+                                   mp_context=context, initializer=self.initializer,
+                                   initargs=self.initargs)
+        try:
             futures = {pool.submit(fn, *args): key for key, args in tasks}
             for future in as_completed(futures):
                 try:
                     yield Outcome(futures[future], future.result())
                 except Exception as exc:
                     yield Outcome(futures[future], error=_describe(exc))
+        except BaseException:  # interrupted, or the consumer stopped early
+            _kill_pool(pool)
+            raise
+        pool.shutdown(wait=True)
+
+
+def _kill_pool(pool) -> None:
+    """Stop a process pool now: queued tasks cancelled, running ones killed (a plain
+    shutdown would wait for every task already handed to a worker)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.kill()
+    for process in processes:
+        with contextlib.suppress(Exception):
+            process.join(timeout=5)
 
 
 class RayExecutor:
@@ -114,34 +142,34 @@ class RayExecutor:
     def run(self, fn: Callable, tasks: Iterable[tuple[str, tuple]]) -> Iterator[Outcome]:
         ray = import_ray()
         tasks = list(tasks)
-        started = not ray.is_initialized()
-        if started:
-            init_ray(ray, self.workers, self.address)
-        try:
+        connection = (ray_connection(ray, self.workers, self.address)
+                      if not ray.is_initialized() else contextlib.nullcontext())
+        with connection:
             remote = ray.remote(max_retries=RAY_RETRIES, retry_exceptions=False)(_call)
             pending = {remote.remote(self.initializer, self.initargs, fn, args): key
                        for key, args in tasks}
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1)
-                for ref in ready:
-                    key = pending.pop(ref)
-                    try:
-                        yield Outcome(key, ray.get(ref))
-                    except ray.exceptions.RayTaskError as exc:
-                        yield Outcome(key, error=_describe(exc.cause or exc))
-                    except ray.exceptions.RayError as exc:  # lost worker after retries
-                        yield Outcome(key, error=_describe(exc))
-        finally:
-            if started:
-                ray.shutdown()
+            try:
+                while pending:
+                    ready, _ = ray.wait(list(pending), num_returns=1, timeout=RAY_WAIT_S)
+                    for ref in ready:
+                        key = pending.pop(ref)
+                        try:
+                            yield Outcome(key, ray.get(ref))
+                        except ray.exceptions.RayTaskError as exc:
+                            yield Outcome(key, error=_describe(exc.cause or exc))
+                        except ray.exceptions.RayError as exc:  # lost worker after retries
+                            yield Outcome(key, error=_describe(exc))
+            except BaseException:  # interrupted, or the consumer stopped early
+                for ref in pending:
+                    with contextlib.suppress(Exception):
+                        ray.cancel(ref, force=True)
+                raise
 
 
-def init_ray(ray, workers: int, address: str | None) -> None:
-    """Connect to the cluster at ``address``, or start a local instance of ``workers`` CPUs.
-
-    Workers import this project as the driver does (an editable install or the driver's
-    PYTHONPATH) and run BLAS single-threaded.
-    """
+def ray_options(workers: int | None = None) -> dict:
+    """``ray.init``'s keywords: workers import this project as the driver does (an
+    editable install on every node, or the driver's PYTHONPATH where it exists) and run
+    BLAS single-threaded; ``workers`` CPUs for a local instance."""
     import logging
     import os
     import sys
@@ -151,27 +179,98 @@ def init_ray(ray, workers: int, address: str | None) -> None:
            "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     options = {"include_dashboard": False, "log_to_driver": False,
                "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
-    if address:
-        ray.init(address=address, **options)
-    else:
-        ray.init(num_cpus=workers, **options)
+    return options if workers is None else {**options, "num_cpus": workers}
 
 
 @contextlib.contextmanager
-def executor_session(name: str, workers: int, address: str | None = None):
-    """Keep one Ray connection for several runs (``name == "ray"``); nothing otherwise."""
-    if name != "ray":
+def ray_connection(ray, workers: int, address: str | None):
+    """Connected for the body to the cluster at ``address`` (checked first:
+    :func:`eval.ray_cluster.cluster_connection`), or to a local instance of ``workers``
+    CPUs started for it; shut down afterwards."""
+    before = _sigterm_handler()
+    if address:
+        from eval.ray_cluster import cluster_connection
+
+        connection = cluster_connection(ray, address, ray_options())
+    else:
+        connection = _local_ray(ray, workers)
+    with connection:
+        if before is _interrupt:  # ray.init puts its own SIGTERM handler in: ours again
+            signal.signal(signal.SIGTERM, _interrupt)
         yield
-        return
-    ray = import_ray()
-    if ray.is_initialized():
-        yield
-        return
-    init_ray(ray, workers, address)
+
+
+@contextlib.contextmanager
+def _local_ray(ray, workers: int):
+    ray.init(**ray_options(workers))
     try:
         yield
     finally:
         ray.shutdown()
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _sigterm_handler():
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.getsignal(signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def stop_on_sigterm():
+    """SIGTERM raises KeyboardInterrupt in the body (as Ctrl-C does), so that a stopped
+    run unwinds and keeps what it wrote; the previous handler afterwards. Only in the main
+    thread (elsewhere signals cannot be handled)."""
+    before = _sigterm_handler()
+    if before is None or before is _interrupt:
+        yield
+        return
+    signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
+@contextlib.contextmanager
+def executor_session(name: str, workers: int, address: str | None = None):
+    """One command's run: SIGTERM stops it as Ctrl-C does (:func:`stop_on_sigterm`), and
+    with ``name == "ray"`` one Ray connection is kept for its several runs."""
+    with stop_on_sigterm():
+        if name != "ray":
+            yield
+            return
+        ray = import_ray()
+        if ray.is_initialized():
+            yield
+            return
+        with ray_connection(ray, workers, address):
+            yield
+
+
+def check_executor(name: str, address: str | None) -> None:
+    """Before a command loads anything: Ray installed (``name == "ray"``), and the cluster
+    at ``address`` there and taking the token (:func:`eval.ray_cluster.check_cluster`).
+
+    Raises
+    ------
+    UsageError
+        One line saying what is wrong and the fix.
+    """
+    from upm.core.errors import UsageError
+
+    if address and name != "ray":
+        raise UsageError("--address goes with --executor ray")
+    if name != "ray":
+        return
+    import_ray()
+    if address:
+        from eval.ray_cluster import check_cluster
+
+        check_cluster(address)
 
 
 def import_ray():

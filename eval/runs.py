@@ -101,7 +101,10 @@ class Checkpoint:
 def run_checkpointed(runner, fn, tasks: list, checkpoint: Checkpoint, desc: str,
                      show_progress: bool = True) -> list[tuple[str, str]]:
     """Run ``tasks`` (``(key, args)`` each) on an :mod:`eval.executor` executor, adding
-    each finished one to the checkpoint as it comes, with a progress bar.
+    each finished one to the checkpoint as it comes, with a progress bar. Stopped at any
+    moment (an exception, Ctrl-C, SIGTERM in a command's session), it leaves the
+    checkpoint closed with every unit finished before the stop, and the executor's
+    remaining work stopped; the same call later does only the rest.
 
     Returns
     -------
@@ -114,16 +117,20 @@ def run_checkpointed(runner, fn, tasks: list, checkpoint: Checkpoint, desc: str,
     checkpoint.open()
     bar = progress(total=len(tasks), desc=desc, unit="run",
                    disable=None if show_progress else True)
+    outcomes = runner.run(fn, tasks)
     try:
-        for outcome in runner.run(fn, tasks):
+        for outcome in outcomes:
             if outcome.ok:
                 checkpoint.add(outcome.key, outcome.value)
             else:
                 failures.append((outcome.key, outcome.error))
             bar.update()
     finally:
+        checkpoint.close()  # every finished unit is on disk, whatever stopped the run
         bar.close()
-        checkpoint.close()
+        close = getattr(outcomes, "close", None)
+        if close is not None:  # stopped early (Ctrl-C, SIGTERM): the executor's work too
+            close()
     return failures
 
 

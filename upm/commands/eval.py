@@ -51,7 +51,8 @@ one with the same seed, scored identically.
 The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
 pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
 the pairs get it. It runs on a local process pool, or on Ray (--executor ray: a local
-Ray instance, or an existing cluster with --address). Finished runs are kept in
+Ray instance, or an existing cluster with --address ray://HEAD:10001 or HEAD:6379:
+docs/guides/ray-cluster.md). Ctrl-C or SIGTERM stops it at any time. Finished runs are kept in
 OUT/physics-partial.jsonl as they come: if runs fail or the command is stopped, the
 same command completes only what is missing.
 
@@ -113,8 +114,12 @@ def configure(parser) -> None:
     parser.add_argument("--executor", choices=("local", "ray"), default="local",
                         help="where the work runs: a local process pool (default) or Ray")
     parser.add_argument("--address", metavar="ADDR", default=None,
-                        help="an existing Ray cluster (e.g. ray://head:10001); default with "
-                             "--executor ray: a local Ray instance with --workers CPUs")
+                        help="an existing Ray cluster: ray://HEAD:10001 (Ray Client, from "
+                             "any machine) or HEAD:6379 (the head's GCS, from a machine of the "
+                             "cluster); the token, if the cluster asks for one, from "
+                             "RAY_AUTH_TOKEN, RAY_AUTH_TOKEN_PATH or ~/.ray/auth_token. "
+                             "Default with --executor ray: a local Ray instance with --workers "
+                             "CPUs")
 
 
 def parse_windows(text: str | None, default) -> tuple[int, ...]:
@@ -172,14 +177,12 @@ def run(args) -> int:
     if not 1 <= physics_pairs <= pairs:
         raise UsageError(f"--physics-pairs must be between 1 and --pairs ({pairs}), "
                          f"not {physics_pairs}")
-    if args.address and args.executor != "ray":
-        raise UsageError("--address goes with --executor ray")
-    if args.executor == "ray":
-        from eval.executor import import_ray
+    from eval.executor import check_executor
 
-        import_ray()
+    check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
     catalog = Catalog(args.data)
-    config = StudyConfig(data_dir=str(catalog.root), pairs=pairs, windows=windows,
+    # absolute: Ray workers open it from their own working directory
+    config = StudyConfig(data_dir=str(catalog.root.resolve()), pairs=pairs, windows=windows,
                          seed=args.seed, methods=methods, inbetween=args.inbetween)
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
           f"{','.join(map(str, windows))}, seed {args.seed}; in-betweening: "

@@ -71,7 +71,8 @@ def configure(parser) -> None:
     parser.add_argument("--executor", choices=("local", "ray"), default="local",
                         help="where the runs go: a local process pool (default) or Ray")
     parser.add_argument("--address", metavar="ADDR", default=None,
-                        help="an existing Ray cluster (with --executor ray)")
+                        help="an existing Ray cluster (with --executor ray): ray://HEAD:10001 "
+                             "(Ray Client) or HEAD:6379 (the head's GCS), as upm eval's")
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="skip robustness.png")
 
@@ -101,23 +102,20 @@ def run(args) -> int:
     strength = check_strength(args.strength)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be at least 1, not {args.workers}")
-    if args.address and args.executor != "ray":
-        raise UsageError("--address goes with --executor ray")
     if args.map is not None and not Path(args.map).is_file():
         raise UsageError(f"--map {args.map}: no such file")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
-    if args.executor == "ray":
-        from eval.executor import import_ray
+    from eval.executor import check_executor
 
-        import_ray()
+    check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
     catalog = Catalog(args.data)
     rows = parse_rows(args.rows, catalog.names()) if args.rows else list(DEFAULT_ROWS)
     for piece in sorted({p for row in rows for p in row.pieces}):
         if catalog.load_ref(piece).n_frames < 2:  # a one-line error for a bad clip or range
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
-    settings = Settings(data_dir=str(catalog.root), map_path=args.map,
+    settings = Settings(data_dir=str(catalog.root.resolve()), map_path=args.map,
                         offset_deg=float(args.offset_deg), search_budget=args.search_budget,
                         cut=args.cut, strength=strength)
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
