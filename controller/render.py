@@ -3,7 +3,9 @@ character through a transition, frames side by side), and videos.
 
 Rendering uses ``mujoco.Renderer``, closed explicitly after use. On Linux without a
 display, OSMesa (software OpenGL, Debian's ``libosmesa6``) is used: ``MUJOCO_GL=osmesa``
-is set before MuJoCo creates a context (:func:`offscreen_gl`), which needs no GPU.
+is set before MuJoCo creates a context (:func:`offscreen_gl`), which needs no GPU. What a
+frame costs there, the settings chosen for videos and figures, and the worker processes
+that render frames side by side: :mod:`controller.render_pool`.
 
 Formats, by the output's suffix (:func:`write_video`): ``.mp4`` (H.264, through the
 ffmpeg binary that the ``imageio-ffmpeg`` wheel bundles — or ``$IMAGEIO_FFMPEG_EXE``),
@@ -19,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from controller.render_pool import FIGURE, VIDEO, RenderSettings, render_frames_parallel
 
 #: Colour of the bar marking frames inside a transition window (RGB, 0-255).
 WINDOW_COLOUR = (230, 120, 20)
@@ -105,7 +109,7 @@ def side_view(model, qpos, root_qpos: int = 0) -> View:
 
 
 def render_frames(model, qpos, width: int = 240, height: int = 320, view: View | None = None,
-                  follow: bool = True) -> np.ndarray:
+                  follow: bool = True, settings: RenderSettings = VIDEO) -> np.ndarray:
     """Pictures of the humanoid in each state.
 
     Parameters
@@ -113,42 +117,24 @@ def render_frames(model, qpos, width: int = 240, height: int = 320, view: View |
     model : mujoco.MjModel
     qpos : array_like, shape (N, nq)
     width, height : int
-        Pixels (at most the model's offscreen buffer, 1280 x 720).
+        Pixels.
     view : View, optional
         Default: :func:`side_view` of ``qpos``.
     follow : bool
         Centre every picture on the root's horizontal position (else on the first).
+    settings : RenderSettings
+        Shadow map, anti-aliasing and worker processes
+        (:mod:`controller.render_pool`; default :data:`~controller.render_pool.VIDEO`).
 
     Returns
     -------
     ndarray of uint8, shape (N, height, width, 3)
     """
     offscreen_gl()
-    import mujoco
-
     qpos = np.atleast_2d(np.asarray(qpos, dtype=float))
     view = view or side_view(model, qpos)
-    data = mujoco.MjData(model)
-    camera = mujoco.MjvCamera()
-    camera.type = mujoco.mjtCamera.mjCAMERA_FREE
-    camera.azimuth, camera.elevation = view.azimuth_deg, view.elevation_deg
-    camera.distance = view.distance_m
-    out = np.zeros((qpos.shape[0], height, width, 3), dtype=np.uint8)
-    renderer = mujoco.Renderer(model, height=height, width=width)
-    # The floor's reflection costs a quarter of the (software) rendering time.
-    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-    try:
-        for i, q in enumerate(qpos):
-            data.qpos[:] = q
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_camlight(model, data)
-            centre = q if follow else qpos[0]
-            camera.lookat[:] = (centre[0], centre[1], view.height_m)
-            renderer.update_scene(data, camera=camera)
-            renderer.render(out=out[i])
-    finally:
-        renderer.close()
-    return out
+    centres = qpos[:, :2] if follow else np.repeat(qpos[:1, :2], len(qpos), axis=0)
+    return render_frames_parallel(model, qpos, centres, view, width, height, settings)
 
 
 def mark_windows(images, in_window, thickness: int = 8) -> np.ndarray:
@@ -230,7 +216,8 @@ def filmstrip(model, rows, frames, path, *, fps: float | None = None, windows=()
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(rows), len(frames), squeeze=False)
     for r, (label, qpos) in enumerate(rows):
-        images = render_frames(model, np.asarray(qpos)[frames], width, height, view)
+        images = render_frames(model, np.asarray(qpos)[frames], width, height, view,
+                               settings=FIGURE)
         images = mark_windows(images, in_window[frames])
         for c, frame in enumerate(frames):
             ax = axes[r, c]
@@ -251,7 +238,7 @@ def filmstrip(model, rows, frames, path, *, fps: float | None = None, windows=()
 
 
 def write_video(model, qpos, fps: float, path, *, windows=(), video_fps: float = 30.0,
-                width: int = 480, height: int = 360) -> Path:
+                width: int = 480, height: int = 360, settings: RenderSettings = VIDEO) -> Path:
     """Render a trajectory to a video (``.mp4``, ``.gif``) or a filmstrip (``.png``).
 
     Parameters
@@ -269,6 +256,9 @@ def write_video(model, qpos, fps: float, path, *, windows=(), video_fps: float =
         Frames per second of the video (every ``round(fps / video_fps)``-th state is
         drawn, so the video plays in real time).
     width, height : int
+    settings : RenderSettings
+        How the frames are rendered and encoded (:mod:`controller.render_pool`; default
+        :data:`~controller.render_pool.VIDEO`: two processes, no anti-aliasing).
 
     Returns
     -------
@@ -298,14 +288,14 @@ def write_video(model, qpos, fps: float, path, *, windows=(), video_fps: float =
     in_window = np.zeros(len(qpos), dtype=bool)
     for window in windows:
         in_window[window] = True
-    images = render_frames(model, qpos[frames], width, height,
-                           side_view(model, qpos))
+    images = render_frames(model, qpos[frames], width, height, side_view(model, qpos),
+                           settings=settings)
     images = mark_windows(images, in_window[frames])
     rate = fps / step
     if suffix == ".gif":
         _write_gif(images, rate, path)
     else:
-        _write_mp4(images, rate, path)
+        _write_mp4(images, rate, path, settings.x264_preset)
     return path
 
 
@@ -320,7 +310,7 @@ def _write_gif(images, rate: float, path: Path) -> None:
                          duration=round(1000 / rate), loop=0)
 
 
-def _write_mp4(images, rate: float, path: Path) -> None:
+def _write_mp4(images, rate: float, path: Path, preset: str) -> None:
     import imageio_ffmpeg
 
     from upm.core.fileio import atomic_path
@@ -328,7 +318,8 @@ def _write_mp4(images, rate: float, path: Path) -> None:
     height, width = images.shape[1:3]
     with atomic_path(path) as tmp:
         writer = imageio_ffmpeg.write_frames(tmp, (width, height), fps=rate, codec="libx264",
-                                             macro_block_size=8, ffmpeg_log_level="error")
+                                             macro_block_size=8, ffmpeg_log_level="error",
+                                             output_params=["-preset", preset])
         writer.send(None)
         for image in images:
             writer.send(np.ascontiguousarray(image))

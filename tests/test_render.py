@@ -2,6 +2,7 @@
 short videos in each format."""
 
 import subprocess
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -103,3 +104,95 @@ def test_filmstrip_frames_surround_each_window():
     assert len(filmstrip_frames([slice(10, 200), slice(250, 390)], 400)) == 16
     assert filmstrip_frames([], 40, limit=8) == list(range(0, 40, 5))
     assert max(filmstrip_frames([slice(380, 400)], 400)) < 400
+
+
+def _in_forked_child(check) -> int:
+    """Run ``check()`` in a forked process (so that OpenGL used there stays there): its exit
+    code, 0 when it returned without raising."""
+    import multiprocessing
+
+    process = multiprocessing.get_context("fork").Process(target=check)
+    process.start()
+    process.join(300)
+    return process.exitcode
+
+
+def test_workers_render_the_same_pictures_and_leave_this_process_without_opengl(
+        model02, walk_qpos):
+    from controller.render_pool import VIDEO, fork_is_safe
+
+    qpos = walk_qpos[:40:4]
+    view = side_view(model02, walk_qpos)
+    shadow, samples = model02.vis.quality.shadowsize, model02.vis.quality.offsamples
+    one = render_frames(model02, qpos, 64, 48, view, settings=VIDEO.with_processes(1))
+    two = render_frames(model02, qpos, 64, 48, view,
+                        settings=replace(VIDEO, processes=2, min_frames_per_process=1))
+    assert one.shape == (10, 48, 64, 3) and one.std() > 10
+    assert np.array_equal(one, two)  # split between two processes, the same pixels
+    # the model's own settings are left as they were, and this process never rendered
+    assert (model02.vis.quality.shadowsize, model02.vis.quality.offsamples) == (shadow, samples)
+    assert fork_is_safe()
+
+
+def test_rendering_here_once_opengl_ran_here(model02, walk_qpos):
+    """Where this process has run llvmpipe (its threads), forked workers would hang: the
+    frames are rendered here, the same pictures (checked in a child of its own)."""
+    from controller.render_pool import VIDEO, fork_is_safe, render_into
+
+    qpos = walk_qpos[:8:4]
+    view = side_view(model02, walk_qpos)
+    forked = render_frames(model02, qpos, 64, 48, view, settings=VIDEO.with_processes(1))
+
+    def check():
+        here = np.zeros_like(forked)
+        render_into(here, model02, qpos, qpos[:, :2], view, VIDEO)
+        assert not fork_is_safe()  # llvmpipe's threads now run here
+        again = render_frames(model02, qpos, 64, 48, view)
+        assert np.array_equal(here, forked) and np.array_equal(again, forked)
+
+    assert _in_forked_child(check) == 0
+
+
+def test_a_worker_that_fails_is_an_error(model02, walk_qpos):
+    from controller.render_pool import VIDEO
+
+    with pytest.raises(RuntimeError, match="rendering process failed"):
+        render_frames(model02, walk_qpos[:4, :-1], 64, 48, side_view(model02, walk_qpos),
+                      settings=VIDEO.with_processes(1))
+
+
+def test_the_floor_left_out_of_the_shadow_map_changes_no_pixel(model02, walk_qpos,
+                                                              monkeypatch):
+    from controller import render_pool
+
+    qpos = walk_qpos[:60:20]
+    view = side_view(model02, walk_qpos)
+    settings = render_pool.VIDEO.with_processes(1)
+    left_out = render_frames(model02, qpos, 96, 64, view, settings=settings)
+    monkeypatch.setattr(render_pool, "_floor_casts_no_shadow", lambda scene: None)
+    drawn = render_frames(model02, qpos, 96, 64, view, settings=settings)
+    assert np.array_equal(left_out, drawn)
+
+
+def test_only_a_floor_lit_from_above_is_left_out_of_the_shadow_map(model02):
+    import mujoco
+
+    from controller.render_pool import _floor_casts_no_shadow
+
+    scene = mujoco.MjvScene(model02, maxgeom=100)
+    data = mujoco.MjData(model02)
+    mujoco.mj_forward(model02, data)
+    mujoco.mjv_updateScene(model02, data, mujoco.MjvOption(), None, mujoco.MjvCamera(),
+                           mujoco.mjtCatBit.mjCAT_ALL, scene)
+    kinds = [scene.geoms[i].type for i in range(scene.ngeom)]
+    floor = kinds.index(mujoco.mjtGeom.mjGEOM_PLANE)
+    sun = [i for i in range(scene.nlight) if scene.lights[i].castshadow]
+    assert sun and scene.geoms[floor].category == mujoco.mjtCatBit.mjCAT_STATIC
+    scene.lights[sun[0]].dir[2] = 0.5  # a shadow-casting light from below: the floor stays
+    _floor_casts_no_shadow(scene)
+    assert scene.geoms[floor].category == mujoco.mjtCatBit.mjCAT_STATIC
+    scene.lights[sun[0]].dir[2] = -1.0
+    _floor_casts_no_shadow(scene)
+    assert scene.geoms[floor].category == mujoco.mjtCatBit.mjCAT_DECOR
+    assert all(scene.geoms[i].category != mujoco.mjtCatBit.mjCAT_DECOR
+               for i in range(scene.ngeom) if i != floor)

@@ -106,6 +106,51 @@ def target(value: float, limit: float, ratio: float | None = None,
     return out
 
 
+def ratio_target(ratio: float, limit: float, reference: str, **context) -> dict:
+    """A speed target set as a ratio to a reference measured in the same run (the figure
+    that carries across machines and load), judged on that ratio alone.
+
+    Parameters
+    ----------
+    ratio : float
+        The figure over its same-run reference.
+    limit : float
+        The largest ratio that meets the target.
+    reference : str
+        What the ratio is against.
+    **context
+        Figures shown beside it (e.g. the absolute time, the absolute target the ratio
+        came from); not judged.
+
+    Returns
+    -------
+    dict
+        ``value`` (the ratio), ``target`` (``limit``), ``met`` (``value <= target``),
+        ``unit`` ("ratio"), ``reference``, then ``context``.
+    """
+    return {"value": ratio, "target": limit, "met": bool(ratio <= limit), "unit": "ratio",
+            "reference": reference, **context}
+
+
+def missed_targets(report: dict) -> list[str]:
+    """One line per target missed in a ``upm bench`` report: every entry of each
+    benchmark's ``targets`` whose ``met`` (or, where it has one, ``met_by_ratio``) is false.
+    """
+    lines = []
+    for bench, figures in report.get("benchmarks", {}).items():
+        for name, entry in figures.get("targets", {}).items():
+            missed = []
+            if not entry["met"]:
+                unit = "x the reference" if entry.get("unit") == "ratio" else ""
+                missed.append(f"{entry['value']:.4g}{unit} > target {entry['target']:.4g}{unit}")
+            if entry.get("met_by_ratio") is False:
+                missed.append(f"ratio to the reference {entry['ratio']:.3g} > target "
+                              f"{entry['target_ratio']:.3g}")
+            if missed:
+                lines.append(f"upm bench: target missed: {bench}.{name}: {'; '.join(missed)}")
+    return lines
+
+
 def clip_on_humanoid(context: BenchContext, clip: str, quick_frames: int):
     """A real clip (its first ``quick_frames`` frames in quick mode) and the humanoid of its
     subject: the material of the MuJoCo benchmarks.

@@ -27,10 +27,11 @@ def configure(parser) -> None:
 def run(args) -> int:
     import json
     import platform
+    import sys
 
     from threadpoolctl import threadpool_info, threadpool_limits
 
-    from eval.bench import BenchContext, discover
+    from eval.bench import BenchContext, discover, missed_targets
     from upm.commands.common import print_json
     from upm.core.errors import UsageError
     from upm.core.fileio import atomic_write_text
@@ -59,4 +60,6 @@ def run(args) -> int:
     if args.out:
         atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
     print_json(report)
+    for line in missed_targets(report):
+        print(line, file=sys.stderr)
     return 0

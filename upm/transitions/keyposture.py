@@ -18,12 +18,14 @@ for even L the middle falls between two frames and the spline passes through K t
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from upm.core.errors import UsageError
-from upm.ops.angles import angle_diff_deg, wrap_deg
+from upm.transitions import kernels
 from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
-from upm.transitions.spline import keyframe_spline
+from upm.transitions.spline import window_weights
 
 
 def key_posture_unwrapped(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -33,24 +35,34 @@ def key_posture_unwrapped(problem: WindowProblem) -> tuple[np.ndarray, np.ndarra
     -------
     key_wrapped, key_continuous : ndarray, shape (63,)
     """
+    key_wrapped, key, _ = _key(problem)
+    return key_wrapped, key
+
+
+def _key(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`key_posture_unwrapped` and the squared differences (63,) of the continuous
+    key from the alpha-point."""
     source = problem.key_source
-    key = np.asarray(source.key_posture(wrap_deg(problem.a_deg), wrap_deg(problem.b_deg),
-                                        problem.alpha), dtype=float)
-    if key.shape != problem.a_deg.shape or not np.isfinite(key).all():
+    a, b = problem.a_deg, problem.b_deg
+    key = np.asarray(source.key_posture(*kernels.wrap_pair(a, b), problem.alpha), dtype=float)
+    if key.shape != a.shape:
+        finite = False
+    else:
+        key_wrapped, near, squares, finite = kernels.key_on_turn(key, a, b, problem.alpha)
+    if not finite:
         raise UsageError(f"the key-posture source {type(source).__name__} returned "
                          f"{key.shape} values (expected 63 finite degrees)")
-    point = problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg)
-    return wrap_deg(key), point + angle_diff_deg(key, point)
+    return key_wrapped, near, squares
 
 
 def solve(problem: WindowProblem) -> WindowResult:
-    key_wrapped, key = key_posture_unwrapped(problem)
-    times = np.concatenate([problem.before_times, [problem.key_time], problem.after_times])
+    key_wrapped, key, squares = _key(problem)
     values = np.concatenate([problem.before_deg, key[None], problem.after_deg])
-    window = keyframe_spline(times, values, problem.window_times)
-    c = problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg)
-    return WindowResult(window, key_posture_deg=key_wrapped, diagnostics={
-        "key_distance_to_alpha_point_deg": float(np.sqrt(np.sum((key - c) ** 2))),
+    # keyframe_spline through clip 1's frames, the key at the middle, clip 2's frames
+    weights = window_weights(problem.before_deg.shape[0], problem.after_deg.shape[0],
+                             problem.frames)
+    return WindowResult(weights @ values, key_posture_deg=key_wrapped, diagnostics={
+        "key_distance_to_alpha_point_deg": math.sqrt(np.sum(squares)),
     })
 
 

@@ -38,15 +38,14 @@ import numpy as np
 from upm.motion.skeleton import Skeleton
 from upm.ops.angles import wrap_deg
 from upm.ops.rotations import (
+    _AXIS_INDEX,
     continuous_euler_deg,
-    euler_to_matrix,
     matrix_to_quaternion,
     rotation_exp,
     rotation_log,
 )
-from upm.transitions.spline import SPLINE_CONTEXT, spline_weights
-
-_HORIZONTAL = slice(0, 3, 2)  # tx, tz (a slice: views, not fancy-index copies)
+from upm.transitions import kernels
+from upm.transitions.spline import SPLINE_CONTEXT, window_weights
 
 
 @dataclass(frozen=True)
@@ -82,6 +81,20 @@ def heading_deg(matrix) -> np.ndarray:
         about a horizontal axis.
     """
     return _heading_of_quaternion(matrix_to_quaternion(matrix))
+
+
+@functools.lru_cache(maxsize=8)
+def _order_axes(order: str) -> tuple[int, int, int]:
+    """The axis indices (first applied first) of a rotation order, a permutation of XYZ."""
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"rotation order must be a permutation of XYZ, not {order!r}")
+    return tuple(_AXIS_INDEX[axis] for axis in order)
+
+
+def _wrap(angle_deg: float) -> float:
+    """:func:`upm.ops.angles.wrap_deg` of one float (the same operations)."""
+    wrapped = (angle_deg + 180.0) % 360.0 - 180.0
+    return wrapped - 360.0 if wrapped >= 180.0 else wrapped
 
 
 def _heading_of_quaternion(q) -> np.ndarray:
@@ -133,16 +146,6 @@ def _key_rotation(quat_a, quat_b, turn_deg: float, s: float) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-@functools.lru_cache(maxsize=64)
-def _spline_weights(k1: int, k2: int, frames: int) -> np.ndarray:
-    """The root splines' weights (L, k1 + 1 + k2): key frames at the last ``k1`` frames
-    of clip 1 (A at 0), the key at the window's middle and the first ``k2`` of clip 2
-    (B at L + 1), evaluated at the window's frames 1 .. L."""
-    n_steps = frames + 1
-    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
-    return spline_weights(times, np.arange(1, frames + 1, dtype=float))
-
-
 def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
                align_heading: bool = True, context: int = SPLINE_CONTEXT) -> RootBlend:
     """The root of the window, and clip 2's root re-anchored after it.
@@ -170,47 +173,40 @@ def blend_root(before_root, after_root, frames: int, alpha: float, order: str,
     """
     before = np.asarray(before_root, dtype=float)
     after = np.asarray(after_root, dtype=float)
-    n_steps = frames + 1
     k1, k2 = min(context, before.shape[0]), min(context, after.shape[0])
 
-    # One call per rotation function over every frame that needs it (small calls cost
-    # their fixed overhead, not their arithmetic).
-    rotations = euler_to_matrix(np.concatenate([before[-k1:, 3:], after[:, 3:]]), order)
+    # Few calls, each over every frame that needs it: a small numpy call costs its fixed
+    # overhead, not its arithmetic. The element-wise steps are compiled
+    # (:mod:`upm.transitions.kernels`, the same operations); matrix products and arctan2
+    # stay numpy's, so that the root is the same to the last bit.
+    factors = kernels.axis_factors(np.concatenate([before[-k1:, 3:], after[:, 3:]]))
+    first, middle, last = _order_axes(order)
+    rotations = factors[:, last] @ (factors[:, middle] @ factors[:, first])  # euler_to_matrix
     rot_before, rot_after = rotations[:k1], rotations[k1:]
-    quat_a, quat_b = matrix_to_quaternion(rotations[k1 - 1:k1 + 1]).tolist()
+    quats = matrix_to_quaternion(rotations[k1 - 1:k1 + 1])
+    quat_a, quat_b = quats.tolist()
     turn = 0.0
     if align_heading:
-        heading_a, heading_b = _heading_of_quaternion(np.array([quat_a, quat_b]))
-        turn = float(wrap_deg(heading_a - heading_b))
-    theta = np.deg2rad(turn)
-    c, s = np.cos(theta), np.sin(theta)
+        # _heading_of_quaternion, its arctan2 on the same (2,) arrays, the rest on floats
+        heading_a, heading_b = np.arctan2(quats[:, 2], quats[:, 0]).tolist()
+        turn = _wrap(_wrap(2.0 * math.degrees(heading_a)) - _wrap(2.0 * math.degrees(heading_b)))
+    theta = math.radians(turn)
+    c, s = math.cos(theta), math.sin(theta)
     turn_matrix = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # axis_rotation Y
     rot_after = turn_matrix @ rot_after
 
-    # Clip 2's translation relative to B, turned with it.
+    # Clip 2's translation relative to B, turned with it; the horizontal velocity blend.
     relative = (after[:, :3] - after[0, :3]) @ turn_matrix.T
-    v1 = before[-1, _HORIZONTAL] - before[-2, _HORIZONTAL] if before.shape[0] > 1 else 0.0
-    v2 = relative[1, _HORIZONTAL] if after.shape[0] > 1 else 0.0
-    w = np.arange(n_steps) / frames
-    steps = (1.0 - w)[:, None] * v1 + w[:, None] * v2
-    path = before[-1, _HORIZONTAL] + np.cumsum(steps, axis=0)  # (L+1, 2): window, then B
-
     window = np.empty((frames, 6))
-    window[:, _HORIZONTAL] = path[:frames]
     new_after = np.empty_like(after)
-    new_after[:, _HORIZONTAL] = path[frames] + relative[:, _HORIZONTAL]
-    new_after[:, 1] = after[:, 1]
+    key_height = kernels.root_path(before, after, relative, frames, alpha, window, new_after)
 
-
-    key_height = before[-1, 1] + alpha * (after[0, 1] - before[-1, 1])
     key_rot = _key_rotation(quat_a, quat_b, turn, alpha)
     context_rots = np.concatenate([rot_before, rot_after[:k2]])
     vectors = rotation_log(key_rot.T @ context_rots)
     # Height and rotation vector through the same key times: one spline.
-    keys = np.zeros((k1 + 1 + k2, 4))
-    keys[:, 0] = np.concatenate([before[-k1:, 1], [key_height], after[:k2, 1]])
-    keys[:k1, 1:], keys[k1 + 1:, 1:] = vectors[:k1], vectors[k1:]
-    splined = _spline_weights(k1, k2, frames) @ keys
+    keys = kernels.root_keys(before, key_height, after, vectors, k1, k2)
+    splined = window_weights(k1, k2, frames) @ keys
     window[:, 1] = splined[:, 0]
     window_rots = key_rot @ rotation_exp(splined[:, 1:])
 

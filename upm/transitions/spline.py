@@ -66,3 +66,14 @@ def _weights(times: tuple, query_times: tuple) -> np.ndarray:
     weights = make_interp_spline(t, np.eye(t.size), k=degree, axis=0)(np.array(query_times))
     weights.setflags(write=False)
     return weights
+
+
+@functools.lru_cache(maxsize=64)
+def window_weights(k1: int, k2: int, frames: int) -> np.ndarray:
+    """The weights (L, k1 + 1 + k2) of a transition's splines (:func:`spline_weights`): key
+    frames at the last ``k1`` frames of clip 1 (A at 0), the key at the window's middle
+    ``(L + 1) / 2`` and the first ``k2`` frames of clip 2 (B at L + 1), evaluated at the
+    window's frames 1 .. L (``frames`` = L). Read-only."""
+    n_steps = frames + 1
+    times = np.concatenate([np.arange(1 - k1, 1), [0.5 * n_steps], n_steps + np.arange(k2)])
+    return spline_weights(times, np.arange(1, frames + 1, dtype=float))
