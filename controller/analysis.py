@@ -1,31 +1,29 @@
 """Every physical check of one motion in one call: the kinematic checks per frame, the
 inverse-dynamics residual, and the tracking simulations, assembled into a report
-(:mod:`controller.report`). ``upm check`` and ``upm simulate`` are thin layers on this."""
+(:mod:`controller.report`). ``upm check`` and ``upm simulate`` are thin layers on this.
+Every tuning constant comes from the :class:`controller.config.ControllerConfig` given
+(the residual check's ``residual``, the simulations' and the window runs'
+``window_runs``), and the report's settings record it whole (``controller_config``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-#: Free-root runs per window start this long before the window ...
-WINDOW_LEAD_S = 0.5
-#: ... and end this long after it.
-WINDOW_TAIL_S = 0.5
-
+from controller.config import DEFAULT, ControllerConfig
 
 #: Free-root controllers: the balance controller, or the position servos alone.
 CONTROLLERS = ("balance", "servo")
 
 
-def settings(tracking_modes=(), controller: str = "balance",
-             search_budget: float | None = None, processes: int = 1,
-             strength: float = 1.0) -> dict:
-    """The thresholds and methods of the checks, JSON-ready (units in the names).
-    ``strength``: the multiple of the strength tables' torque limits the model was loaded
-    with (:func:`humanoid_xml.models.load_model`)."""
+def settings(tracking_modes=(), controller: str = "balance", processes: int = 1,
+             strength: float = 1.0, config: ControllerConfig = DEFAULT) -> dict:
+    """The thresholds and methods of the checks, JSON-ready (units in the names), and
+    the whole configuration (``controller_config``: :meth:`ControllerConfig.as_dict`, which
+    :meth:`ControllerConfig.from_dict` reads back). ``strength``: the multiple of the
+    strength tables' torque limits the model was loaded with
+    (:func:`humanoid_xml.models.load_model`)."""
     from controller.checks.contacts import SELF_COLLISION_DEPTH_M
-    from controller.checks.dynamics import FRICTION, LOWPASS_HZ, SUPPORT_DISTANCE_M
     from controller.checks.validity import FLOOR_TOLERANCE_M
-    from controller.tracking.servo import FALL_FRACTION, MAX_STEP_S
     from upm.motion.limits import LIMIT_TOLERANCE_DEG
 
     out = {
@@ -34,9 +32,9 @@ def settings(tracking_modes=(), controller: str = "balance",
         "floor_tolerance_mm": 1000 * FLOOR_TOLERANCE_M,
         "strength": strength,
         "dynamics": {
-            "lowpass_hz": LOWPASS_HZ,
-            "support_distance_m": SUPPORT_DISTANCE_M,
-            "friction": FRICTION,
+            "lowpass_hz": config.residual.lowpass_hz,
+            "support_distance_m": config.residual.support_distance_m,
+            "friction": config.residual.friction,
             "force_unit": "body weight",
             "torque_unit": "body weight x stature (torque about the root)",
         },
@@ -44,8 +42,8 @@ def settings(tracking_modes=(), controller: str = "balance",
     if tracking_modes:
         out["tracking"] = {
             "modes": list(tracking_modes),
-            "max_step_s": MAX_STEP_S,
-            "fall_fraction": FALL_FRACTION,
+            "max_step_s": config.step.max_step_s,
+            "fall_fraction": config.falls.fraction,
             "servo_targets": "reference hinge angles, linearly interpolated, taken kv/kp "
                              "ahead (a velocity reference for the damping)",
             "driven_root": "free joint qpos/qvel set from the reference before every step",
@@ -61,12 +59,12 @@ def settings(tracking_modes=(), controller: str = "balance",
                 if controller == "balance" else "position servos alone (open loop)"),
             "body_error": "mean distance of the joint centres from the reference's, each "
                           "relative to its pelvis and heading (drift reported apart)",
-            "search_budget": (_budget(search_budget) if controller == "balance"
-                              else None),
+            "search_budget": config.search.budget if controller == "balance" else None,
             "processes": processes if controller == "balance" else None,
-            "window_free_lead_s": WINDOW_LEAD_S,
-            "window_free_tail_s": WINDOW_TAIL_S,
+            "window_free_lead_s": config.window_runs.lead_s,
+            "window_free_tail_s": config.window_runs.tail_s,
         }
+    out["controller_config"] = config.as_dict()
     return out
 
 
@@ -89,16 +87,10 @@ def motion_description(model, motion, model_path=None) -> dict:
     }
 
 
-def _budget(search_budget):
-    from controller.balance.search import SEARCH_BUDGET
-
-    return SEARCH_BUDGET if search_budget is None else float(search_budget)
-
-
 def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False,
-             search_budget: float | None = None, processes: int = 1):
-    """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller``: a
-    :class:`controller.balance.report.BalanceTracking` or a
+             processes: int = 1, config: ControllerConfig = DEFAULT):
+    """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller`` with
+    ``config``: a :class:`controller.balance.report.BalanceTracking` or a
     :class:`controller.tracking.Tracking`. ``processes``: the balance controller's (1 or
     2, see :func:`controller.balance.follow`)."""
     from controller.balance.report import balance_tracking
@@ -108,17 +100,17 @@ def free_run(model, qpos, fps: float, controller: str = "balance", progress: boo
         raise ValueError(f"unknown controller {controller!r} (controllers: "
                          f"{', '.join(CONTROLLERS)})")
     if controller == "balance":
-        return balance_tracking(model, qpos, fps, progress=progress,
-                                search_budget=search_budget, processes=processes)
-    return track_qpos(model, qpos, fps, "free")
+        return balance_tracking(model, qpos, fps, config=config, progress=progress,
+                                processes=processes)
+    return track_qpos(model, qpos, fps, "free", config=config)
 
 
-def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
-                     tail_s: float = WINDOW_TAIL_S, controller: str = "balance",
-                     progress: bool = False, search_budget: float | None = None,
-                     processes: int = 1) -> list[dict]:
-    """Per window, a free-root simulation from the reference state ``lead_s`` before the
-    window to ``tail_s`` after it: does the character get through it standing?
+def window_free_runs(model, motion, windows, controller: str = "balance",
+                     progress: bool = False, processes: int = 1,
+                     config: ControllerConfig = DEFAULT) -> list[dict]:
+    """Per window, a free-root simulation from the reference state
+    ``config.window_runs.lead_s`` before the window to ``tail_s`` after it: does the
+    character get through it standing?
 
     Returns
     -------
@@ -131,14 +123,15 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
 
     qpos = to_qpos(model, motion)
     n = motion.n_frames
+    lead_s, tail_s = config.window_runs.lead_s, config.window_runs.tail_s
     out = []
     for window in progress_bar(windows, desc="window runs", unit="window",
                                disable=None if progress else True):
         w0, w1, _ = window.indices(n)
         a = max(0, w0 - round(lead_s * motion.fps))
         b = min(n, w1 + round(tail_s * motion.fps))
-        run = free_run(model, qpos[a:b], motion.fps, controller,
-                       search_budget=search_budget, processes=processes)
+        run = free_run(model, qpos[a:b], motion.fps, controller, processes=processes,
+                       config=config)
         inside = slice(w0 - a, w1 - a)
         fall_frame = run.run.fall_frame if controller == "balance" else run.fall_frame
         fall = None if fall_frame is None else a + fall_frame
@@ -157,7 +150,7 @@ def window_free_runs(model, motion, windows, lead_s: float = WINDOW_LEAD_S,
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
             model_path=None, controller: str = "balance", progress: bool = False,
-            search_budget: float | None = None, processes: int = 1, strength: float = 1.0):
+            processes: int = 1, strength: float = 1.0, config: ControllerConfig = DEFAULT):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -184,14 +177,15 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
         The free-root controller (:data:`CONTROLLERS`): ``"balance"`` or ``"servo"``.
     progress : bool
         Progress bars for the simulations.
-    search_budget : float, optional
-        The balance controller's search budget (``controller.balance.follow``).
     processes : int
         The balance controller's processes, 1 or 2 (``controller.balance.follow``: the
         same runs, less wall time on 2 free cores).
     strength : float
         For the report: the multiple of the strength tables' torque limits ``model`` was
         loaded with (:func:`humanoid_xml.models.load_model`).
+    config : controller.config.ControllerConfig
+        The tuning constants of the residual check and the simulations (recorded in the
+        report's settings as ``controller_config``).
 
     Returns
     -------
@@ -208,18 +202,20 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
 
     windows = tuple(windows)
     validity = check_motion(model, motion, windows)
-    residual = root_residual(model, to_qpos(model, motion), motion.fps) if dynamics else None
+    check = config.residual
+    residual = (root_residual(model, to_qpos(model, motion), motion.fps,
+                              check.support_distance_m, check.friction, check.lowpass_hz)
+                if dynamics else None)
     tracking = {mode: (free_run(model, to_qpos(model, motion), motion.fps, controller,
-                                progress, search_budget, processes)
-                       if mode == "free" else track(model, motion, mode))
+                                progress, processes, config)
+                       if mode == "free" else track(model, motion, mode, config=config))
                 for mode in tracking_modes}
     per_window = (window_free_runs(model, motion, windows, controller=controller,
-                                   progress=progress, search_budget=search_budget,
-                                   processes=processes)
+                                   progress=progress, processes=processes, config=config)
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
-                          settings=settings(tuple(tracking_modes), controller, search_budget,
-                                            processes, strength),
+                          settings=settings(tuple(tracking_modes), controller, processes,
+                                            strength, config),
                           residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)

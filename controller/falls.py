@@ -1,23 +1,19 @@
 """Whether a simulated character has fallen: its pelvis or head below a share of its
 standing height while the reference's is not, and well below the reference's (a
 reference that crouches or lies down is not a fall, nor is a character that follows a
-reference bending through that height a few centimetres lower)."""
+reference bending through that height a few centimetres lower). The share and the margin
+are the configuration's ``falls`` section (:class:`controller.config.sections.FallsConfig`:
+half the standing height, and a tenth of it)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-#: Fallen: pelvis or head below this share of its standing height (the reference's not) ...
-FALL_FRACTION = 0.5
-#: ... and more than this share of its standing height below the reference's. On 02_06
-#: (bend over and scoop up) the character's head passed half its standing height 4 cm
-#: under the reference's, which it was following down and up again: without the margin,
-#: a fall at 0.98 s. Only a reference that comes within this margin of the threshold
-#: is judged differently (of the data's clips, 02_06, 02_10 and 05_06).
-FALL_MARGIN = 0.1
+from controller.config import DEFAULT
 
 
-def fallen(pelvis_m, head_m, reference_pelvis_m, reference_head_m, figures) -> np.ndarray:
+def fallen(pelvis_m, head_m, reference_pelvis_m, reference_head_m, figures,
+           falls=DEFAULT.falls) -> np.ndarray:
     """Frames at which the character is down, bool, the shape of the inputs.
 
     Parameters
@@ -27,36 +23,40 @@ def fallen(pelvis_m, head_m, reference_pelvis_m, reference_head_m, figures) -> n
     reference_pelvis_m, reference_head_m : array_like, shape (T,)
     figures : controller.body.BodyFigures
         The standing heights.
+    falls : controller.config.sections.FallsConfig
+        The share of the standing height and the margin.
     """
     def down(sim_m, ref_m, standing_m):
         sim_m, ref_m = np.asarray(sim_m), np.asarray(ref_m)
-        low = FALL_FRACTION * standing_m
-        return (sim_m < low) & (ref_m >= low) & (ref_m - sim_m > FALL_MARGIN * standing_m)
+        low = falls.fraction * standing_m
+        return (sim_m < low) & (ref_m >= low) & (ref_m - sim_m > falls.margin * standing_m)
 
     with np.errstate(invalid="ignore"):
         return (down(pelvis_m, reference_pelvis_m, figures.pelvis_height_m)
                 | down(head_m, reference_head_m, figures.head_height_m))
 
 
-def fall_frame(pelvis_m, head_m, reference_pelvis_m, reference_head_m, figures) -> int | None:
+def fall_frame(pelvis_m, head_m, reference_pelvis_m, reference_head_m, figures,
+               falls=DEFAULT.falls) -> int | None:
     """The first frame at which the character is down (:func:`fallen`), or None."""
     hits = np.flatnonzero(fallen(pelvis_m, head_m, reference_pelvis_m, reference_head_m,
-                                 figures))
+                                 figures, falls))
     return int(hits[0]) if hits.size else None
 
 
-def fall_rule(figures) -> str:
+def fall_rule(figures, falls=DEFAULT.falls) -> str:
     """The rule in words, with the thresholds."""
-    return rule_text(figures.pelvis_height_m, figures.head_height_m)
+    return rule_text(figures.pelvis_height_m, figures.head_height_m, falls)
 
 
-def rule_text(standing_pelvis_m: float, standing_head_m: float) -> str:
+def rule_text(standing_pelvis_m: float, standing_head_m: float, falls=DEFAULT.falls) -> str:
     """:func:`fall_rule` for the standing pelvis and head heights, m."""
-    return (f"pelvis or head below {FALL_FRACTION:g} x standing height "
-            f"({FALL_FRACTION * standing_pelvis_m:.3f} m, "
-            f"{FALL_FRACTION * standing_head_m:.3f} m) while the reference's is not, and "
-            f"more than {FALL_MARGIN:g} x standing height "
-            f"({FALL_MARGIN * standing_pelvis_m:.3f} m, {FALL_MARGIN * standing_head_m:.3f} m) "
+    share, margin = falls.fraction, falls.margin
+    return (f"pelvis or head below {share:g} x standing height "
+            f"({share * standing_pelvis_m:.3f} m, "
+            f"{share * standing_head_m:.3f} m) while the reference's is not, and "
+            f"more than {margin:g} x standing height "
+            f"({margin * standing_pelvis_m:.3f} m, {margin * standing_head_m:.3f} m) "
             "below the reference's")
 
 

@@ -6,22 +6,21 @@ the reference's body drifts by centimetres (02_01: median 4.4 cm above the floor
 its first frame is put on it, 02_03: 5.9 cm, 16_15: 0.9 cm into it). A character that
 tracks such a pelvis height either lifts its stance foot or straightens its legs. Here,
 at every frame in which the reference has a foot down, the root is shifted vertically so
-that the body's lowest point is :data:`GROUND_DEPTH_M` into the floor; frames with no
-foot down (flight) take the shift interpolated from their neighbours, and the shift is
-low-passed (:data:`GROUND_SHIFT_HZ`) so that it adds no jerk of its own.
+that the body's lowest point is ``grounding.depth_m`` (1 mm) into the floor; frames with
+no foot down (flight) take the shift interpolated from their neighbours, and the shift is
+low-passed (``grounding.shift_hz``, 2 Hz) so that it adds no jerk of its own
+(:class:`controller.config.sections.GroundingConfig`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-#: The lowest point of a standing frame is put this far into the floor, metres.
-GROUND_DEPTH_M = 0.001
-#: Cut-off of the zero-phase low-pass applied to the height shift, Hz.
-GROUND_SHIFT_HZ = 2.0
+from controller.config import DEFAULT
 
 
-def ground_reference(model, qpos, fps: float, down) -> tuple[np.ndarray, np.ndarray]:
+def ground_reference(model, qpos, fps: float, down,
+                     grounding=DEFAULT.grounding) -> tuple[np.ndarray, np.ndarray]:
     """The reference with its root height shifted onto the floor.
 
     Parameters
@@ -32,6 +31,7 @@ def ground_reference(model, qpos, fps: float, down) -> tuple[np.ndarray, np.ndar
     fps : float
     down : ndarray of bool, shape (T, 2)
         Whether the reference has its left and right foot down at each frame.
+    grounding : controller.config.sections.GroundingConfig
 
     Returns
     -------
@@ -49,10 +49,11 @@ def ground_reference(model, qpos, fps: float, down) -> tuple[np.ndarray, np.ndar
     standing = np.flatnonzero(np.asarray(down).any(axis=1))
     shift = np.zeros(n)
     if standing.size:
-        at = -floor_clearances(model, out[standing]) - GROUND_DEPTH_M
+        at = -floor_clearances(model, out[standing]) - grounding.depth_m
         shift = np.interp(np.arange(n), standing, at)
-        if n > 9 and GROUND_SHIFT_HZ < 0.5 * fps:
-            b, a = butter(2, GROUND_SHIFT_HZ / (0.5 * fps))
+        cutoff_hz = grounding.shift_hz
+        if n > 9 and cutoff_hz < 0.5 * fps:
+            b, a = butter(2, cutoff_hz / (0.5 * fps))
             shift = filtfilt(b, a, shift)
     out[:, int(model.jnt_qposadr[free_joint(model)]) + 2] += shift
     return out, shift

@@ -34,7 +34,7 @@ version 2): every trouble the search worked on, ``{"frame", "time_s", "cause", "
 "rerun_s", "outcome", "restarts_by_mode", "rerun_s_by_mode", "last_mode"}``
 (:class:`controller.balance.search.SearchTrouble`; the last three added within version 2:
 the retries and the seconds run again by the mode of the segment each restart changed,
-one entry per mode of ``controller.balance.control.MODES``, and the mode of the last
+one entry per mode of the configuration's ``modes``, and the mode of the last
 restart, the change that got past the trouble when it did); and every part's,
 ``torque_by_actuator`` (added within version 2; JSON only): per actuator ``{"peak_nm",
 "mean_nm", "range_nm", "saturation_share", "saturated_concentric_share"}``: the torque's
@@ -54,6 +54,12 @@ over those the search changed (``..._search_modes``; ``null`` where there are no
 
 ``settings.strength`` (added within version 2; readers of older reports take 1): every
 joint's torque limit was the strength tables' times this (``upm simulate --strength``).
+
+``settings.controller_config`` (added within version 2, missing from older reports): every
+tuning constant of the controller, the servo tracking and the residual check the report
+was made with (:meth:`controller.config.ControllerConfig.as_dict`; ``upm simulate
+--config``); ``ControllerConfig.from_dict`` of it gives the same configuration, and the
+same motion with it the same run.
 
 ``software`` names the versions the figures were computed with: a free-root run is
 deterministic on one installation, but its search takes discrete decisions, so another

@@ -337,6 +337,8 @@ def physics_document(physics) -> dict:
             "real_windows": [{"window": k, "n": len(v)}
                              for k, v in physics.real_windows.items()],
             "records": "physics.csv (kind, id, window, method, metric, value)",
+            # every tuning constant of the controller (ControllerConfig.from_dict reads it)
+            "controller_config": physics.controller_config.as_dict(),
         },
         "metrics": {name: {"unit": m.unit, "better": m.better,
                            "description": m.description}

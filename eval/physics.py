@@ -16,7 +16,11 @@ names them, :func:`run_unit` runs one in a worker (:mod:`eval.executor`: a local
 Ray). Finished units are appended to a checkpoint file in the output directory as they
 come (:class:`Checkpoint`), so a run that fails or is stopped keeps them and the same
 command completes only what is missing. The figures are deterministic (the controller has
-no randomness), whatever the executor and the number of workers.
+no randomness), whatever the executor and the number of workers. The controller's tuning
+constants are one :class:`controller.config.ControllerConfig` (``upm eval --physics
+--config FILE.toml``): it goes to every worker with the study's data, into the
+checkpoint's settings (a checkpoint made with another configuration is not reused) and
+into results.json.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from controller.config import DEFAULT, ControllerConfig
 from eval.records import REAL, Records
 from eval.runs import Checkpoint, StudyIncomplete, run_checkpointed
 
@@ -163,13 +168,15 @@ def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
     return data.model(clip), motion.frames(lo, hi), window.start - lo, window.stop - lo
 
 
-def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
-    """Run the balance controller over ``motion`` and the figures of its window."""
+def simulate_unit(model, motion, start: int, stop: int,
+                  config: ControllerConfig = DEFAULT) -> dict[str, float]:
+    """Run the balance controller (with ``config``) over ``motion`` and the figures of
+    its window."""
     from controller import to_qpos
     from controller.balance.follow import follow
     from controller.balance.run import window_summary
 
-    run = follow(model, to_qpos(model, motion), motion.fps)
+    run = follow(model, to_qpos(model, motion), motion.fps, config=config)
     summary = window_summary(run, start, stop)
     fell = run.fall_frame is not None
     going_down = 0.0 if fell else window_summary(run, 0, run.n_frames)["ends_in_trouble"]
@@ -190,8 +197,10 @@ def simulate_unit(model, motion, start: int, stop: int) -> dict[str, float]:
 _WORKER: dict = {}
 
 
-def init_worker(config, pairs: dict, real_windows: dict) -> None:
-    """Load the study's data once per worker process (idempotent)."""
+def init_worker(config, pairs: dict, real_windows: dict,
+                controller_config: ControllerConfig = DEFAULT) -> None:
+    """Load the study's data once per worker process (idempotent), and keep the
+    controller's configuration for its units."""
     from eval.runs import single_threaded_blas
     from eval.study import prepare
 
@@ -199,13 +208,14 @@ def init_worker(config, pairs: dict, real_windows: dict) -> None:
         single_threaded_blas()
         _WORKER.update(config=config, data=prepare(config), pairs=pairs,
                        real_windows=real_windows)
+    _WORKER["controller_config"] = controller_config
 
 
 def run_unit(unit: Unit) -> dict[str, float]:
     """One unit in a worker (after :func:`init_worker`)."""
     model, motion, start, stop = unit_motion(_WORKER["data"], unit, _WORKER["pairs"],
                                              _WORKER["real_windows"])
-    return simulate_unit(model, motion, start, stop)
+    return simulate_unit(model, motion, start, stop, _WORKER["controller_config"])
 
 
 def records_of(units: list[Unit], done: dict[str, dict[str, float]]) -> Records:
@@ -272,6 +282,8 @@ class PhysicsResult:
     workers : int
     wall_s : float
         Wall time of the units run now.
+    controller_config : controller.config.ControllerConfig
+        The balance controller's configuration.
     """
 
     records: Records
@@ -283,11 +295,13 @@ class PhysicsResult:
     executor: str
     workers: int
     wall_s: float
+    controller_config: ControllerConfig = DEFAULT
 
 
 def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                 address: str | None = None, workers: int | None = None,
-                show_progress: bool = True) -> PhysicsResult:
+                show_progress: bool = True,
+                controller_config: ControllerConfig = DEFAULT) -> PhysicsResult:
     """Run the free-root test on the first ``n_pairs`` pairs of a study.
 
     Parameters
@@ -304,6 +318,8 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
         A Ray cluster (with ``executor="ray"``).
     workers : int, optional
         Processes (local) or CPUs of a local Ray instance; default: the usable cores.
+    controller_config : controller.config.ControllerConfig
+        The balance controller's tuning constants.
 
     Raises
     ------
@@ -326,17 +342,18 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                                               context=context)
                     for frames in config.windows}
     units = task_list(list(pairs.values()), real_windows, config.methods, config.windows)
-    checkpoint = Checkpoint(out_dir, {"data": Path(config.data_dir).name, "seed": config.seed,
-                                      "context_s": CONTEXT_S, "alpha": config.as_dict()["alpha"]},
-                            name=CHECKPOINT_NAME, format_name=CHECKPOINT_FORMAT,
-                            version=CHECKPOINT_VERSION)
+    settings = {"data": Path(config.data_dir).name, "seed": config.seed, "context_s": CONTEXT_S,
+                "alpha": config.as_dict()["alpha"],
+                "controller_config": controller_config.as_dict()}
+    checkpoint = Checkpoint(out_dir, settings, name=CHECKPOINT_NAME,
+                            format_name=CHECKPOINT_FORMAT, version=CHECKPOINT_VERSION)
     resumed = checkpoint.load()
     todo = [u for u in units if u.key not in checkpoint.done]
     workers = max(1, min(workers or default_workers(), max(1, len(todo))))
     # This process already holds the data: forked workers inherit it.
     _WORKER.update(config=config, data=data, pairs=pairs, real_windows=real_windows)
     runner = make_executor(executor, workers, address, init_worker,
-                           (config, pairs, real_windows))
+                           (config, pairs, real_windows, controller_config))
     start = time.perf_counter()
     by_key = {u.key: u for u in todo}
     failures = [(by_key[key], error) for key, error in run_checkpointed(
@@ -354,4 +371,5 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                                     result.clips, config.methods, config.windows, config.seed)
     return PhysicsResult(records=records, statistics=statistics, pairs=n_pairs,
                          real_windows=real_windows, checkpoint=checkpoint, resumed=resumed,
-                         executor=executor, workers=workers, wall_s=wall)
+                         executor=executor, workers=workers, wall_s=wall,
+                         controller_config=controller_config)

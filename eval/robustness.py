@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from controller.config import DEFAULT, ControllerConfig
 from upm.core.errors import UsageError
 
 CHECKPOINT_NAME = "robustness-partial.jsonl"
@@ -134,8 +135,10 @@ class Settings:
         (cached).
     offset_deg : float
         Standard deviation of each joint channel's offset, degrees.
-    search_budget : float or None
-        The balance controller's search budget (None: its default).
+    controller_config : controller.config.ControllerConfig
+        The balance controller's tuning constants (its search's budget among them): they
+        travel with every unit to its worker, and a checkpoint made with another
+        configuration is not reused.
     cut : str
         Where a sequence's pieces but the last end: ``"whole"`` (their last frame) or
         ``"matched"`` (:func:`upm.transitions.cuts.matched_pieces`).
@@ -146,7 +149,7 @@ class Settings:
     data_dir: str
     map_path: str | None
     offset_deg: float
-    search_budget: float | None
+    controller_config: ControllerConfig = DEFAULT
     cut: str = "whole"
     strength: float = 1.0
 
@@ -159,8 +162,8 @@ class Settings:
             digest = hashlib.sha256(Path(self.map_path).read_bytes()).hexdigest()[:16]
             the_map = f"{Path(self.map_path).name} (sha256 {digest})"
         return {"data": Path(self.data_dir).name, "map": the_map,
-                "offset_deg": self.offset_deg, "search_budget": self.search_budget,
-                "cut": self.cut, "strength": self.strength}
+                "offset_deg": self.offset_deg, "cut": self.cut, "strength": self.strength,
+                "controller_config": self.controller_config.as_dict()}
 
 
 class Unit(NamedTuple):
@@ -228,18 +231,15 @@ def reference(settings: Settings, row: Row, seed: int):
     return model, motion
 
 
-def search_by_mode(troubles) -> dict:
+def search_by_mode(troubles, n_modes: int = len(DEFAULT.modes)) -> dict:
     """Where the search's work went, by the mode of the segment each restart changed
-    (:data:`controller.balance.control.MODES`): ``{"restarts", "rerun_s", "got_past"}``,
-    one entry per mode each; ``got_past`` counts the troubles whose last restart (the
-    change that got past) was in that mode. ``troubles``: a report's
+    (one of the configuration's ``n_modes`` modes): ``{"restarts", "rerun_s",
+    "got_past"}``, one entry per mode each; ``got_past`` counts the troubles whose last
+    restart (the change that got past) was in that mode. ``troubles``: a report's
     ``search_troubles``."""
-    from controller.balance.control import MODES
-
-    out = {"restarts": [0] * len(MODES), "rerun_s": [0.0] * len(MODES),
-           "got_past": [0] * len(MODES)}
+    out = {"restarts": [0] * n_modes, "rerun_s": [0.0] * n_modes, "got_past": [0] * n_modes}
     for trouble in troubles:
-        for m in range(len(MODES)):
+        for m in range(n_modes):
             out["restarts"][m] += trouble["restarts_by_mode"][m]
             out["rerun_s"][m] += trouble["rerun_s_by_mode"][m]
         if trouble["outcome"] == "got past" and trouble["last_mode"] is not None:
@@ -260,14 +260,14 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
 
     single_threaded_blas()
     model, motion = reference(settings, unit.row, unit.seed)
-    tracking = free_run(model, to_qpos(model, motion), motion.fps,
-                        search_budget=settings.search_budget, processes=1)
+    config = settings.controller_config
+    tracking = free_run(model, to_qpos(model, motion), motion.fps, processes=1, config=config)
     summary = tracking.run_summary()
     out = {k: summary[k] for k in RUN_FIELDS}
     out["search_gave_up"] = [{"time_s": trouble["time_s"], "outcome": trouble["outcome"]}
                              for trouble in summary["search_troubles"]
                              if trouble["outcome"] != "got past"]
-    out["search_by_mode"] = search_by_mode(summary["search_troubles"])
+    out["search_by_mode"] = search_by_mode(summary["search_troubles"], len(config.modes))
     out["seconds"] = round(motion.n_frames / motion.fps, 4)
     out["wall_s"] = round(tracking.run.wall_s, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)

@@ -126,13 +126,17 @@ def table_markdown(report: dict) -> str:
                      + (f", {other} with no mode left within its reach." if other else "."))
     by_mode = t.get("search_by_mode")
     if by_mode and sum(by_mode["restarts"]):
-        lines += ["", *_by_mode_markdown(by_mode)]
+        lines += ["", *_by_mode_markdown(by_mode, s.get("controller_config"))]
     return "\n".join(lines) + "\n"
 
 
-def _by_mode_markdown(by_mode: dict) -> list[str]:
-    """The search's work by mode, every run together (markdown lines)."""
-    from controller.balance.control import MODES
+def _by_mode_markdown(by_mode: dict, controller_config: dict | None) -> list[str]:
+    """The search's work by mode, every run together (markdown lines); the modes those of
+    the study's ``controller_config`` (a report of before it was recorded: the default)."""
+    from controller.config import DEFAULT, ControllerConfig
+
+    config = (DEFAULT if controller_config is None
+              else ControllerConfig.from_dict(controller_config, "the study's settings"))
 
     total_s = sum(by_mode["rerun_s"]) or 1.0
     lines = ["The search's work by the mode of the segment each restart changed (every run "
@@ -140,8 +144,8 @@ def _by_mode_markdown(by_mode: dict) -> list[str]:
              "| mode | placement gain | swing contacts not planned | swing clearance (m) | "
              "spine held | restarts | simulated s run again | troubles got past |",
              "|---|---|---|---|---|---|---|---|"]
-    for m, mode in enumerate(MODES):
-        lines.append(f"| {m} | {mode.placement_gain:g} | {mode.swing_contacts_excluded} | "
+    for m, mode in enumerate(config.modes):
+        lines.append(f"| {m} | {config.mode_gain(mode):g} | {mode.swing_contacts_excluded} | "
                      f"{mode.swing_clearance_m:g} | {'yes' if mode.spine_held else 'no'} | "
                      f"{by_mode['restarts'][m]} | "
                      f"{by_mode['rerun_s'][m]:.1f} "

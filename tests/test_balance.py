@@ -128,7 +128,7 @@ def test_a_reference_it_cannot_follow_is_a_fall_with_its_time(lifted):
 
 
 def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
-    from controller.balance.search import TROUBLE_UP
+    from controller.config import DEFAULT
     from controller.qpos import free_joint
 
     # with both feet drawn up the character goes down: the search spends its budget and
@@ -150,7 +150,7 @@ def test_going_on_in_trouble_is_reported(model02, lifted, walk, walk_run):
     for t in np.flatnonzero(np.isfinite(run.qpos[:, 0]))[1:]:
         data.qpos[:] = run.qpos[t]
         mujoco.mj_kinematics(sim, data)
-        if data.xmat[pelvis, 8] < TROUBLE_UP:
+        if data.xmat[pelvis, 8] < DEFAULT.search.trouble_up:
             tilted.append(t)
     assert tilted and run.trouble[tilted].all()
     # a walk it follows closely is never in trouble
@@ -198,11 +198,9 @@ def test_saturated_torques_are_the_torques_at_the_joints_strength(model02, walk_
     # the QP keeps its torques within each joint's strength, so a bound it leans on is
     # met to rounding: those frames count as saturated, whichever side of it rounding
     # put the planned torque, and the torque applied there is the strength itself
-    from controller.balance.wbc import AT_BOUND
-
     run = walk_run
     low, high = torque_model(model02).actuator_forcerange.T
-    tol = AT_BOUND * np.maximum(-low, high)
+    tol = run.config.solver.at_bound_share * np.maximum(-low, high)
     up = np.all(np.isfinite(run.torque_nm), axis=1)
     up[0] = False
     torque = run.torque_nm[up]

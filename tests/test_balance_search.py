@@ -13,12 +13,15 @@ from hypothesis import strategies as st
 
 from controller import to_qpos
 from controller.balance import search as balance_search
-from controller.balance.control import MODES, torque_model
+from controller.balance.control import torque_model
 from controller.balance.follow import follow
 from controller.balance.report import BalanceTracking
 from controller.balance.run import replay
+from controller.config import DEFAULT
 from controller.dropouts import fill_dropouts
 from controller.qpos import joint_layout
+
+SEARCH, MODES = DEFAULT.search, DEFAULT.modes
 
 
 def test_16_15_left_arm_dropout_filled(catalog):
@@ -53,15 +56,26 @@ def test_clean_clip_untouched(model02, walk):
 
 
 @pytest.fixture
-def search(model02):
-    sim = torque_model(model02)
-    data = mujoco.MjData(sim)
-    fps, every = 120.0, int(round(balance_search.SEGMENT_S * 120.0))
-    n_frames = 20 * every
-    ref_pelvis, ref_head = np.full(n_frames, 1.0), np.full(n_frames, 1.6)
-    head = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
-    s = balance_search.Search(sim, n_frames, fps, 5, (ref_pelvis, ref_head), (1, head))
-    return s, data, every
+def search_with(model02):
+    """A search of 20 segments at 120 fps with a configuration: ``(search, data,
+    frames per segment)``."""
+
+    def make(config=DEFAULT):
+        sim = torque_model(model02)
+        data = mujoco.MjData(sim)
+        fps, every = 120.0, int(round(config.search.segment_s * 120.0))
+        n_frames = 20 * every
+        ref_pelvis, ref_head = np.full(n_frames, 1.0), np.full(n_frames, 1.6)
+        head = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
+        s = balance_search.Search(sim, n_frames, fps, 5, (ref_pelvis, ref_head), (1, head),
+                                  config=config)
+        return s, data, every
+    return make
+
+
+@pytest.fixture
+def search(search_with):
+    return search_with()
 
 
 def _run_to(search, data, t):
@@ -72,7 +86,7 @@ def _run_to(search, data, t):
 
 def test_search_retries_then_backtracks(search):
     s, data, every = search
-    sweep = balance_search.SWEEP_MODES
+    sweep = SEARCH.sweep_modes
     t = 2 * every + 5  # in segment 2
     _run_to(s, data, t)
     # the segment in trouble runs again in each mode of the sweep, from its saved start
@@ -82,7 +96,7 @@ def test_search_retries_then_backtracks(search):
         assert data.time == 2 * every + 1
         _run_to(s, data, t)
     # no modes left there: the segment before it; segment 2 starts over in its mode,
-    # and the segments after keep it for STICKY_S, then go back to the default
+    # and the segments after keep it for search.sticky_s, then go back to the default
     assert s.retry(data, t, steps=0) == every + 1
     first = sweep[0]
     assert s.mode(every + 1) == first and s.mode(t) == first
@@ -102,7 +116,7 @@ def test_each_frame_reads_the_mode_its_segment_ran_in(search):
     modes = balance_search.frame_modes(s.modes(), s.n_frames, s.fps)
     assert modes.shape == (s.n_frames,)
     assert modes[1:].tolist() == [s.mode(f) for f in range(1, s.n_frames)]
-    assert modes[0] == modes[1] and set(modes.tolist()) == {0, balance_search.SWEEP_MODES[1]}
+    assert modes[0] == modes[1] and set(modes.tolist()) == {0, SEARCH.sweep_modes[1]}
     assert balance_search.frame_modes([], 3, s.fps).tolist() == [0, 0, 0]
 
 
@@ -136,13 +150,13 @@ def test_trouble_is_a_low_pelvis_or_a_bent_over_body(search):
 
 
 def test_tilt_limit_follows_the_reference_only_where_it_bends_over():
-    margin = balance_search.TROUBLE_TILT_MARGIN_DEG
-    limit_deg = math.degrees(math.acos(balance_search.TROUBLE_UP))
+    margin = SEARCH.trouble_tilt_margin_deg
+    limit_deg = math.degrees(math.acos(SEARCH.trouble_up))
     ref_tilt_deg = np.linspace(0.0, 180.0, 721)
     limits = balance_search.tilt_limits(np.cos(np.radians(ref_tilt_deg)))
     # the fixed limit, exactly, wherever the reference is more than the margin inside it
     inside = ref_tilt_deg < limit_deg - margin - 1e-9
-    assert np.all(limits[inside] == balance_search.TROUBLE_UP)
+    assert np.all(limits[inside] == SEARCH.trouble_up)
     # beyond: the reference's tilt plus the margin; never past upside down
     np.testing.assert_allclose(np.degrees(np.arccos(limits[~inside])),
                                np.minimum(180.0, ref_tilt_deg[~inside] + margin), atol=1e-6)
@@ -177,7 +191,7 @@ def test_the_searchs_reference_tilt_is_the_pelvis_body_tilt(model02, catalog):
     np.testing.assert_allclose(balance_search.up_axis_z(qpos[:, adr + 3:adr + 7]), expected,
                                atol=1e-12)
     # the clip bends the pelvis past the fixed limit: the limit follows it there
-    assert min(expected) < balance_search.TROUBLE_UP
+    assert min(expected) < SEARCH.trouble_up
 
 
 def test_search_gives_up_out_of_reach_or_budget(search):
@@ -206,7 +220,7 @@ def test_search_records_each_trouble_and_how_it_ended(search):
     _run_to(s, data, t - 2)  # the next attempt gets into trouble sooner
     assert s.retry(data, t - 2, steps=0) == 2 * every + 1
     (first,) = s.troubles()
-    one, two = balance_search.SWEEP_MODES[:2]  # the sweep's first two modes
+    one, two = SEARCH.sweep_modes[:2]  # the sweep's first two modes
     restarts, rerun_s = np.zeros(len(MODES), int), np.zeros(len(MODES))
     restarts[[one, two]] = 1
     # segment 2 ran again in the first (from its start to frame t), then in the second
@@ -235,10 +249,10 @@ def test_search_records_each_trouble_and_how_it_ended(search):
 
 def test_search_goes_back_as_far_as_its_reach(search):
     """With every mode tried in the segments in reach but the furthest, the search goes
-    back to that one, MAX_BACKTRACK segments before the trouble; with it spent too,
-    nothing is left in reach and the run goes on as it is."""
+    back to that one, search.max_backtrack segments before the trouble; with it spent
+    too, nothing is left in reach and the run goes on as it is."""
     s, data, every = search
-    last, reach = len(MODES) - 1, balance_search.MAX_BACKTRACK
+    last, reach = len(MODES) - 1, SEARCH.max_backtrack
     i = reach + 2  # the segment in trouble
     t = i * every + 5
     assert t < s.n_frames
@@ -257,7 +271,7 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     in every mode of the sweep, segment 1 takes the next ones with segment 2 back on the
     mode it had (inherited), not every combination of the two."""
     s, data, every = search
-    sweep = balance_search.SWEEP_MODES
+    sweep = SEARCH.sweep_modes
     t = 2 * every + 5
     _run_to(s, data, t)
     for _ in sweep:
@@ -276,13 +290,12 @@ def test_search_sweeps_back_one_segment_at_a_time(search):
     assert s.mode(later) == sweep[0] and s.mode(every + 1) == sweep[-1]
 
 
-def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
+def test_a_sweep_that_finds_nothing_tries_the_combinations(search_with):
     """With the sweep through every segment in reach spent, the search runs the choices
     before it again, from the first segment they differ in, and then backtracks through
     the combinations, nearest segment first."""
-    monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 1)
-    s, data, every = search
-    modes, sweep = len(MODES), balance_search.SWEEP_MODES
+    s, data, every = search_with(DEFAULT.updated({"search": {"max_backtrack": 1}}))
+    modes, sweep = len(MODES), SEARCH.sweep_modes
     t = 2 * every + 5
     _run_to(s, data, t)
     for _ in range(2 * len(sweep)):  # segment 2's modes in the sweep, then segment 1's
@@ -302,13 +315,13 @@ def test_a_sweep_that_finds_nothing_tries_the_combinations(search, monkeypatch):
     assert s.mode(every + 1) == 1 and s.mode(t) == 1
 
 
-def test_a_sweep_stays_within_reach_of_its_own_trouble(search, monkeypatch):
+def test_a_sweep_stays_within_reach_of_its_own_trouble(search_with):
     """A sweep whose changes get into trouble sooner than the trouble it sweeps for goes
-    back no further than MAX_BACKTRACK segments before that trouble's own segment, not
-    before the sooner one's: beyond it, the combinations (the choices before it first)."""
-    monkeypatch.setattr(balance_search, "MAX_BACKTRACK", 2)
-    s, data, every = search
-    sweep = balance_search.SWEEP_MODES
+    back no further than search.max_backtrack segments before that trouble's own segment,
+    not before the sooner one's: beyond it, the combinations (the choices before it
+    first)."""
+    s, data, every = search_with(DEFAULT.updated({"search": {"max_backtrack": 2}}))
+    sweep = SEARCH.sweep_modes
     t = 5 * every + 5
     _run_to(s, data, t)
     fail = t
@@ -327,7 +340,7 @@ def test_02_01_grounded(model02, walk):
     """02_01's standing frames hover up to 6 cm above the floor once its first frame is on
     it; grounded, they touch it (within the low-pass's smoothing)."""
     from controller.balance.placement import FootPlacement
-    from controller.grounding import GROUND_DEPTH_M, floor_clearance, ground_reference
+    from controller.grounding import floor_clearance, ground_reference
 
     qpos = to_qpos(model02, walk)
     data = mujoco.MjData(model02)
@@ -338,7 +351,7 @@ def test_02_01_grounded(model02, walk):
     grounded, shift = ground_reference(model02, qpos, walk.fps, down)
     after = np.array([floor_clearance(model02, data, grounded[t]) for t in standing])
     assert before.max() > 0.04
-    assert np.median(np.abs(after + GROUND_DEPTH_M)) < 0.005
+    assert np.median(np.abs(after + DEFAULT.grounding.depth_m)) < 0.005
     assert np.abs(after).max() < 0.02
     # only the root's height moves, and smoothly (no step above 1 mm per frame)
     np.testing.assert_array_equal(np.delete(grounded, 2, axis=1), np.delete(qpos, 2, axis=1))
@@ -358,14 +371,14 @@ def test_search_gives_up_on_the_attempt_that_got_furthest(search):
     assert not s.in_trouble(data, far + 1)  # and no more search
 
 
-def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk, monkeypatch):
+def test_a_run_the_search_went_back_in_replays_to_the_same_motion(model02, walk):
     """Trouble everywhere (any pelvis height is 'too low'): the search goes back, tries
     modes, spends its budget and settles on the attempt that got furthest; the torques it
     recorded still replay open-loop to exactly the motion reported."""
-    monkeypatch.setattr(balance_search, "TROUBLE_DROP_M", -10.0)
-    monkeypatch.setattr(balance_search, "SEARCH_BUDGET", 3.0)
+    config = DEFAULT.updated({"search": {"trouble_drop_m": -10.0, "budget": 3.0}})
     qpos = to_qpos(model02, walk)[:75]
-    run = follow(model02, qpos, walk.fps)
+    run = follow(model02, qpos, walk.fps, config=config)
+    assert run.config is config
     assert run.retries > 0
     assert sum(r.retries for r in run.troubles) == run.retries
     assert {r.outcome for r in run.troubles} <= {"budget spent", "no mode within reach"}

@@ -10,13 +10,13 @@ from scipy.spatial.transform import Rotation
 from controller import to_qpos
 from controller.body import body_figures
 from controller.checks.dynamics import (
-    SUPPORT_DISTANCE_M,
     finite_differences,
     lowpass_qpos,
     raw_inverse_with_contacts,
     root_residual,
     unwrap_hinges,
 )
+from controller.config import DEFAULT
 from controller.qpos import joint_layout
 
 
@@ -138,7 +138,7 @@ def test_real_walks_need_little_hand_of_god(catalog, all_motions):
     assert abs(filtered.needed_force_n[:, 2].mean() / filtered.weight_n - 1.0) < 0.05
     summary = filtered.summary(slice(100, 140))
     assert 0 <= summary["residual_force_bw_mean"] <= summary["residual_force_bw_peak"]
-    assert SUPPORT_DISTANCE_M == 0.05
+    assert DEFAULT.residual.support_distance_m == 0.05
 
 
 def test_lowpass_keeps_quaternions_unit_and_hemisphere_flips_harmless(model02, walk):

@@ -82,7 +82,7 @@ def test_a_failed_run_is_named_kept_and_completed_by_a_rerun(study, tmp_path, mo
 
     calls = []
 
-    def failing(model, motion, start, stop):
+    def failing(model, motion, start, stop, config):
         unit = calls[-1]
         if unit.kind == "pair" and unit.index == 1 and unit.method == "linear":
             raise RuntimeError("the simulation diverged")
@@ -105,11 +105,38 @@ def test_a_failed_run_is_named_kept_and_completed_by_a_rerun(study, tmp_path, mo
 
     calls.clear()
     monkeypatch.setattr(physics, "simulate_unit",
-                        lambda model, motion, start, stop: _fake_figures(calls[-1]))
+                        lambda model, motion, start, stop, config: _fake_figures(calls[-1]))
     result = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
     assert [(u.kind, u.index, u.method) for u in calls] == [("pair", 1, "linear")]
     assert result.resumed == total - 1
     assert len(result.records) == total * len(PHYSICS_METRICS)
+
+
+def test_the_controller_configuration_reaches_the_workers_and_keys_the_checkpoint(
+        study, tmp_path, monkeypatch):
+    """The configuration given to the free-root test is the one every unit runs with, in
+    forked workers too; it is in the checkpoint's settings (a rerun with it resumes, one
+    with another configuration starts afresh) and in results.json's physics protocol."""
+    import eval.physics as physics
+    from controller.config import DEFAULT
+    from eval.outputs import physics_document
+
+    def figures_of(model, motion, start, stop, config):
+        return {name: config.placement.gain for name in PHYSICS_METRICS} | {
+            "fell": 0.0, "fall_after_window_start_s": math.nan}
+
+    monkeypatch.setattr(physics, "simulate_unit", figures_of)
+    other = DEFAULT.updated({"placement": {"gain": 0.45}})
+    first = run_physics(study, PAIRS, tmp_path, workers=2, show_progress=False,
+                        controller_config=other)
+    assert set(first.records.values("pair", 20, "linear", "joint_error_deg_rms")) == {0.45}
+    assert physics_document(first)["protocol"]["controller_config"] == other.as_dict()
+    again = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False,
+                        controller_config=other)
+    assert again.resumed == len(again.records) // len(PHYSICS_METRICS) > 0
+    default = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
+    assert default.resumed == 0
+    assert set(default.records.values("real", 20, "real", "joint_error_deg_rms")) == {0.3}
 
 
 def test_the_long_form_table_refuses_a_misspelt_metric():
@@ -158,6 +185,8 @@ def test_a_failing_output_leaves_no_half_written_folder(data_dir, tmp_path, monk
     (["--physics-pairs", "2"], "--physics-pairs goes with --physics"),
     (["--physics", "--physics-pairs", "9"], "between 1 and --pairs (3)"),
     (["--address", "ray://head:10001"], "--address goes with --executor ray"),
+    (["--config", "c.toml"], "--config sets the free-root test's controller"),
+    (["--physics", "--config", "nosuch.toml"], "nosuch.toml: cannot read"),
 ])
 def test_bad_physics_arguments_are_one_line_errors(data_dir, tmp_path, capsys, args, message):
     from upm.cli import main

@@ -7,7 +7,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from controller.falls import FALL_FRACTION, FALL_MARGIN, fall_frame, fall_rule, fallen
+from controller.config import DEFAULT
+from controller.falls import fall_frame, fall_rule, fallen
+
+FALL_FRACTION, FALL_MARGIN = DEFAULT.falls.fraction, DEFAULT.falls.margin
 
 FIGURES = SimpleNamespace(pelvis_height_m=1.0, head_height_m=1.6)
 
@@ -41,3 +44,14 @@ def test_the_first_frame_down_and_the_rule_in_words():
     head = np.full(5, 1.5)
     assert fall_frame(pelvis, head, reference, head, FIGURES) == 3
     assert "0.500 m" in fall_rule(FIGURES) and "0.160 m" in fall_rule(FIGURES)
+
+
+def test_the_rule_is_the_configurations():
+    """Another share and margin are another rule, in numbers and in words."""
+    from dataclasses import replace
+
+    strict = replace(DEFAULT.falls, fraction=0.8, margin=0.05)
+    pelvis, head = np.array([0.75]), np.array([1.5])
+    assert not fallen(pelvis, head, np.array([1.0]), head, FIGURES)[0]
+    assert fallen(pelvis, head, np.array([1.0]), head, FIGURES, strict)[0]
+    assert "0.800 m" in fall_rule(FIGURES, strict) and "0.080 m" in fall_rule(FIGURES, strict)

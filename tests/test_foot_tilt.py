@@ -102,14 +102,14 @@ def test_the_compiled_ankle_turn_is_the_damped_least_squares(rotation, up, axes)
     orientation ``R`` and hinge axes ``A`` (columns)."""
     from scipy.spatial.transform import Rotation
 
-    from controller.balance.foot_tilt import DAMPING
     from controller.balance.leg_kernels import tilt_ankle
+    from controller.config import DEFAULT
 
     R = Rotation.from_rotvec(rotation).as_matrix()
     xaxis = np.zeros((5, 3))
     hinges, qadr = np.array([1, 3]), np.array([4, 2])
     xaxis[hinges] = axes
-    damping = DAMPING * np.eye(2)
+    damping = DEFAULT.foot_tilt.damping * np.eye(2)
     qpos = np.linspace(0.1, 0.7, 7)
     q = np.full(7, 9.0)
     tilt_ankle(R.ravel(), up, xaxis, hinges, damping, qpos, qadr, q)

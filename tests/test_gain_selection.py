@@ -4,7 +4,10 @@ rollouts are stubbed (the costs given here): what is tested is the schedule."""
 
 import math
 
-from controller.balance.gain_selection import REFINE_COST, GainSelector
+from controller.balance.gain_selection import GainSelector
+from controller.config import DEFAULT
+
+REFINE_COST = DEFAULT.lookahead.refine_cost
 
 EVERY = 60  # frames between choices (0.5 s at 120 fps)
 
@@ -15,6 +18,7 @@ class _Stub(GainSelector):
 
     def __init__(self, costs):  # no model, no rollouts
         self.every_frames = EVERY
+        self.refine_cost = REFINE_COST
         self.costs = list(costs)
         self.made = []
         self.last_cost = math.inf

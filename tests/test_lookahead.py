@@ -12,9 +12,12 @@ import pytest
 
 from controller import to_qpos
 from controller.balance import gain_selection
-from controller.balance.control import MODES, torque_model
+from controller.balance.control import torque_model
 from controller.balance.follow import follow
 from controller.balance.lookahead import Lookahead
+from controller.config import DEFAULT
+
+MODES = DEFAULT.modes
 
 pytestmark = pytest.mark.physics  # free-root runs
 
@@ -161,7 +164,7 @@ class _Coasting:
         return data.ctrl.copy(), data.ctrl.copy()
 
 
-def test_a_rollout_that_strays_from_the_reference_pace_costs_more(model02, monkeypatch):
+def test_a_rollout_that_strays_from_the_reference_pace_costs_more(model02):
     from controller.balance import lookahead
 
     sim = torque_model(model02)
@@ -174,11 +177,10 @@ def test_a_rollout_that_strays_from_the_reference_pace_costs_more(model02, monke
     heights = np.full(6, -1.0)  # never below the reference's pelvis
     costs = {}
     for weight in (0.0, 0.03):
-        monkeypatch.setattr(lookahead, "VELOCITY_WEIGHT_S", weight)
         scratch = mujoco.MjData(sim)
         mujoco.mj_copyData(scratch, sim, data)
         costs[weight], steps = lookahead.rollout_cost(control, scratch, 0, 5, 0.3, MODES[0],
-                                                      heights, 1)
+                                                      heights, 1, velocity_weight_s=weight)
         assert steps == 5
     # five frames at 0.5 m/s off the reference's pace, 0.03 s per m/s each
     assert costs[0.03] - costs[0.0] == pytest.approx(5 * 0.03 * 0.5, rel=1e-3)

@@ -104,7 +104,7 @@ def test_a_run_is_upm_simulate_on_the_same_offset_reference(data_dir, tmp_path, 
 def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     from eval.runs import Checkpoint
 
-    settings = Settings(str(data_dir), None, 0.1, None)
+    settings = Settings(str(data_dir), None, 0.1)
     row = Row(("02_01@0:60",))
     earlier = Checkpoint(tmp_path, settings.as_dict(), name=CHECKPOINT_NAME,
                          format_name="upm-controller/robustness-checkpoint",
@@ -124,9 +124,44 @@ def test_a_stopped_study_resumes_with_only_the_missing_runs(data_dir, tmp_path):
     assert summed_by_mode([result.run(row, 1)]) == result.run(row, 1)["search_by_mode"]
 
 
+def test_the_controller_configuration_is_a_setting_of_the_study(data_dir, tmp_path, capsys):
+    """--config reaches the runs (a search budget of 0: no retries, where the default's
+    search works on 05_11) and the report; --search-budget is laid over the file's; a
+    checkpoint made with another configuration is not resumed."""
+    from controller.config import DEFAULT, ControllerConfig
+
+    path = tmp_path / "c.toml"
+    path.write_text("[search]\nbudget = 0\n[placement]\ngain = 0.35\n")
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows", "05_11@0:120", "--seeds",
+                 "0", "--workers", "1", "--no-figures", "--config", str(path),
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    report = json.loads((out / "robustness.json").read_text())
+    config = ControllerConfig.from_dict(report["settings"]["controller_config"])
+    assert config.search.budget == 0.0 and config.placement.gain == 0.35
+    assert report["runs"]["05_11@0:120#0"]["search_retries"] == 0
+    assert main(["robustness", "--data", str(data_dir), "--rows", "05_11@0:120", "--seeds",
+                 "0", "--workers", "1", "--no-figures", "--config", str(path),
+                 "--search-budget", "0.5", "--out", str(out)]) == 0
+    capsys.readouterr()
+    report = json.loads((out / "robustness.json").read_text())
+    assert report["settings"]["controller_config"]["search"]["budget"] == 0.5
+    assert report["runs"]["05_11@0:120#0"]["search_retries"] > 0
+    plain = Settings(str(data_dir), None, 0.1)
+    other = Settings(str(data_dir), None, 0.1, DEFAULT.with_search_budget(0))
+    row = Row(("02_01@0:30",))
+    run_robustness(other, [row], 0, tmp_path, workers=1, show_progress=False)
+    # the same settings resume; the default configuration's do not
+    assert run_robustness(other, [row], 0, tmp_path, workers=1,
+                          show_progress=False).resumed == 1
+    assert run_robustness(plain, [row], 0, tmp_path, workers=1,
+                          show_progress=False).resumed == 0
+
+
 def test_strength_is_a_setting_of_the_study(data_dir):
-    plain = Settings(str(data_dir), None, 0.1, None)
-    stronger = Settings(str(data_dir), None, 0.1, None, strength=1.5)
+    plain = Settings(str(data_dir), None, 0.1)
+    stronger = Settings(str(data_dir), None, 0.1, strength=1.5)
     assert plain.as_dict()["strength"] == 1.0 and stronger.as_dict()["strength"] == 1.5
     model, _ = reference(plain, Row(("02_01@0:60",)), 0)
     strong_model, _ = reference(stronger, Row(("02_01@0:60",)), 0)
@@ -143,6 +178,7 @@ def test_strength_is_a_setting_of_the_study(data_dir):
     (["--offset-deg", "0"], "--offset-deg"),
     (["--seeds", "-1"], "--seeds"),
     (["--strength", "0"], "--strength 0"),
+    (["--config", "nosuch.toml"], "nosuch.toml: cannot read the configuration"),
 ])
 def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     result = subprocess.run([sys.executable, "-m", "upm", "robustness", "--data",

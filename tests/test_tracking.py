@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from controller import to_qpos
+from controller.config import DEFAULT
 from controller.qpos import joint_layout
 from controller.tracking.servo import (
-    FALL_FRACTION,
     physics_substeps,
     plan_tracking,
     servo_lead_s,
@@ -21,6 +21,8 @@ from controller.tracking.servo import (
 from upm.motion.skeleton import joint_dof_index
 
 pytestmark = pytest.mark.physics  # free-root runs
+
+FALL_FRACTION = DEFAULT.falls.fraction
 
 
 @pytest.fixture(scope="module")
@@ -179,5 +181,9 @@ def test_plan_steps_divide_the_frame_and_interpolate(model02, walk_segment):
     assert np.all(np.abs(plan.ctrl) <= np.pi)
     free_plan = plan_tracking(model02, qpos, 120.0, "free")
     assert free_plan.root_qpos is None and free_plan.root_qvel is None
+    # the longest step is the configuration's: 1 ms gives 9 steps per frame at 120 fps
+    fine = plan_tracking(model02, qpos, 120.0, "driven",
+                         config=DEFAULT.updated({"step": {"max_step_s": 0.001}}))
+    assert fine.substeps == 9 and fine.ctrl.shape == (9 * 9, model02.nu)
     with pytest.raises(ValueError, match="unknown tracking mode"):
         plan_tracking(model02, qpos, 120.0, "flying")

@@ -5,6 +5,7 @@ bounds near binding finds the minimiser of the QP with every bound; the swing le
 least squares is its formula."""
 
 import math
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -12,19 +13,21 @@ import pytest
 import quadprog
 
 from controller import to_qpos
-from controller.balance.control import SPINE_FREE_M, SPINE_HELD_M, BalanceControl
+from controller.balance.control import spine_held
 from controller.balance.follow import follow
 from controller.balance.leg_kernels import damped_least_squares
 from controller.balance.placement import FootPlacement, capture_error_m
 from controller.balance.qp_kernels import qp_terms, recall_active, remember_active, solve_active_set
-from controller.balance.wbc import (
-    CONTACT_DAMPING,
-    FORCE_TOLERANCE,
-    MULTIPLIER_TOLERANCE,
-    SPINE_BODIES,
-    WholeBodyID,
-)
+from controller.balance.wbc import WholeBodyID
 from controller.checks.contacts import floor_contacts
+from controller.config import DEFAULT
+
+CONTACT_DAMPING = DEFAULT.contact.damping_per_s
+FORCE_TOLERANCE = DEFAULT.solver.force_tolerance_bw
+MULTIPLIER_TOLERANCE = DEFAULT.solver.multiplier_tolerance
+SPINE = DEFAULT.spine
+#: The default configuration without the search (runs of its default mode alone).
+NO_SEARCH = DEFAULT.with_search_budget(0)
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +52,7 @@ def captured_run(model02, walk):
     qpos = to_qpos(model02, walk)[:121]
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(WholeBodyID, "torques", spy)
-        run = follow(model02, qpos, walk.fps, search_budget=0)
+        run = follow(model02, qpos, walk.fps, config=NO_SEARCH)
     assert not run.fell
     return captured, np.array(held)
 
@@ -65,7 +68,7 @@ def _documented_joint_weights(solver, spine_held):
     bodies = [solver.model.joint(int(solver.model.dof_jntid[d])).name.split("_")[0]
               for d in range(6, solver.nv)]
     return np.array([w.joints * (1.0 + (w.spine - 1.0) * spine_held)
-                     if body in SPINE_BODIES else w.joints for body in bodies])
+                     if body in SPINE.bodies else w.joints for body in bodies])
 
 
 def _terms(solver, data, exclude):
@@ -116,29 +119,28 @@ def _least_squares_rows(solver, M, h, Jc, qvel, qdd_des, spine_held=0.0):
 def test_the_spine_is_held_while_the_walk_keeps_to_its_capture_offset(captured_run, model02):
     """On 02_01 the character's capture offset stays near the reference's: the spine is
     held at every step (weight ``spine``); it is eased off linearly as the offsets part
-    (the difference carried in the state), and free from SPINE_FREE_M."""
+    (the difference carried in the state), and free from ``spine.free_m``."""
     assert np.all(captured_run[1] == 1.0)
     data = mujoco.MjData(model02)
     held = []
-    for error in (0.0, SPINE_HELD_M, 0.5 * (SPINE_HELD_M + SPINE_FREE_M), SPINE_FREE_M, 1.0):
+    for error in (0.0, SPINE.held_m, 0.5 * (SPINE.held_m + SPINE.free_m), SPINE.free_m, 1.0):
         capture_error_m(data)[:] = error
-        held.append(BalanceControl._spine_held(data))
+        held.append(spine_held(data, SPINE))
     assert held == pytest.approx([1.0, 1.0, 0.5, 0.0, 0.0])
+    # the configuration's distances, not fixed ones
+    wider = replace(SPINE, held_m=0.4, free_m=0.8)
+    capture_error_m(data)[:] = 0.6
+    assert spine_held(data, wider) == pytest.approx(0.5)
 
 
 def test_a_mode_without_the_hold_leaves_the_spine_free(model02, walk, monkeypatch):
     """The hold acts only through the spine's rows and only in a mode that asks for it:
     with the default mode's flag off, every step asks for none, and the run is the one of
     a spine weighted like every hinge (the search's other modes are such runs)."""
-    from dataclasses import replace
-
-    from controller.balance import control as balance_control
-    from controller.balance import follow as balance
-    from controller.balance import gain_selection, wbc
-
     qpos = to_qpos(model02, walk)[:61]
-    free = balance_control.MODES[0]._replace(spine_held=False)
-    assert [m.spine_held for m in balance_control.MODES] == [True] + [False] * 5
+    assert [m.spine_held for m in DEFAULT.modes] == [True] + [False] * 5
+    free = replace(DEFAULT.modes[0], spine_held=False)
+    unheld_config = replace(NO_SEARCH, modes=(free, *DEFAULT.modes[1:]))
     asked = []
     torques = WholeBodyID.torques
 
@@ -148,24 +150,14 @@ def test_a_mode_without_the_hold_leaves_the_spine_free(model02, walk, monkeypatc
 
     with monkeypatch.context() as patch:
         patch.setattr(WholeBodyID, "torques", spy)
-        for module in (balance, gain_selection):
-            patch.setattr(module, "MODES", (free,) + balance_control.MODES[1:])
-        unheld = follow(model02, qpos, walk.fps, search_budget=0)
+        unheld = follow(model02, qpos, walk.fps, config=unheld_config)
     assert asked and not any(asked)
-    even = replace(wbc.Weights(), spine=wbc.Weights().joints)
-    with monkeypatch.context() as patch:
-        patch.setattr(WholeBodyID, "__init__", _with_weights(even))
-        uniform = follow(model02, qpos, walk.fps, search_budget=0)
+    even = NO_SEARCH.updated({"qp": {"spine": DEFAULT.qp.joints}})
+    uniform = follow(model02, qpos, walk.fps, config=even)
     np.testing.assert_array_equal(unheld.qpos, uniform.qpos)
-
-
-def _with_weights(weights):
-    """WholeBodyID's constructor with ``weights`` instead of the defaults."""
-    init = WholeBodyID.__init__
-
-    def patched(self, model, joint_dofs, torque_range_nm, _weights=None):
-        init(self, model, joint_dofs, torque_range_nm, weights)
-    return patched
+    # and the hold does change the run (the test above is not of two equal defaults)
+    held = follow(model02, qpos, walk.fps, config=NO_SEARCH)
+    assert not np.array_equal(held.qpos, uniform.qpos, equal_nan=True)
 
 
 def test_states_have_contacts_and_flight_free_steps(states):

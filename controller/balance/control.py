@@ -12,31 +12,32 @@ At every physics step (``mj_step1``, control, ``mj_step2``) the controller
    in the air by its ankle to the reference's tilt (:mod:`controller.balance.foot_tilt`: the hip
    and knee changes would tilt the sole with them); lets a toe pressed on the floor lie
    flat (:meth:`BalanceControl._flatten_toes`); then keeps every hinge target
-   :data:`LIMIT_MARGIN_DEG` inside its joint's range (the limits' forces are not in the
+   ``tracking.limit_margin_deg`` inside its joint's range (the limits' forces are not in the
    plan);
 3. asks for ``qdd_des = qdd_ref + kp e + kd (qd_ref - qd)`` (clipped to
-   :data:`MAX_ACCELERATION`) with ``e`` the difference between the target and the state
+   ``tracking.max_acceleration``) with ``e`` the difference between the target and the state
    (``mj_differentiatePos``): the hinges and the root's orientation and height stiffly, the
    root's horizontal position not at all, only its velocity (the character may drift from
    the reference's path: the drift is reported as ``root_drift_m`` rather than fought);
 4. solves whole-body inverse dynamics with the step's floor contacts in friction pyramids,
    no force on the root and each joint's torque range (:class:`controller.balance.wbc.WholeBodyID`),
    in the default mode holding the spine to the clip's posture while the character's
-   capture offset is near the reference's (:data:`SPINE_HELD_M`: the trunk is left free to
+   capture offset is near the reference's (``spine.held_m``: the trunk is left free to
    balance the body where it is not, and in the search's other modes);
 5. applies the joint torques through torque actuators: the model is used with its position
    servos turned into torque motors of the same strength (:func:`torque_model`). The root
    has no actuator and ``xfrc_applied`` is never written.
 
-How it does the second step is the controller's :class:`Mode`; :data:`MODES` are the ones
-the search (:mod:`controller.balance.search`) tries where the default leads to trouble.
+How it does the second step is the controller's :class:`controller.config.Mode`; the
+configuration's ``modes`` are the ones the search (:mod:`controller.balance.search`) tries
+where the default leads to trouble. Every constant named here in ``section.key`` form is a
+field of the :class:`controller.config.ControllerConfig` the controller is given.
 """
 
 from __future__ import annotations
 
 import copy
 import math
-from typing import NamedTuple
 
 import numpy as np
 
@@ -49,53 +50,7 @@ from controller.balance.step_kernels import (
     reference_at,
 )
 from controller.checks.contacts import floor_contacts
-
-#: Natural frequencies of the tracking (Hz) and damping ratio.
-JOINT_HZ = 5.0
-ROOT_ROTATION_HZ = 3.0
-ROOT_HEIGHT_HZ = 2.0
-ROOT_HORIZONTAL_DAMPING = 10.0
-DAMPING_RATIO = 1.0
-#: Largest desired acceleration, rad/s^2 or m/s^2: a glitch in the reference (16_15 jumps
-#: by 30 degrees for 2 frames at its start) must not ask for more than the body can do.
-MAX_ACCELERATION = 300.0
-#: Targets are kept this far inside each hinge's range, degrees.
-LIMIT_MARGIN_DEG = 2.0
-
-
-class Mode(NamedTuple):
-    """One way of running the controller (see :data:`MODES`)."""
-
-    placement_gain: float
-    swing_contacts_excluded: str
-    swing_clearance_m: float
-    spine_held: bool
-
-
-#: The controller's modes, tried in this order where the default leads to trouble: the
-#: foot-placement gain, which floor contacts of the foot the reference has in the air are
-#: not planned as support ("none"; "swing toes": a swing toe that scrapes the floor is not
-#: pinned to it; "foot": no contact of that foot), the swing ankle's clearance above the
-#: reference's, metres (:mod:`controller.balance.placement`), whether the spine is held to the
-#: clip's posture while the character's capture offset is near the reference's
-#: (:data:`SPINE_HELD_M`; where it is not, the hips and the trunk are left to balance
-#: the body). The first is the default. In every mode a toe pressed on the floor lies
-#: flat (:meth:`BalanceControl._flatten_toes`).
-MODES = (Mode(0.3, "none", 0.0, True), Mode(0.3, "none", 0.04, False),
-         Mode(0.6, "none", 0.02, False), Mode(0.3, "swing toes", 0.04, False),
-         Mode(0.6, "swing toes", 0.04, False), Mode(0.3, "foot", 0.04, False))
-#: A toe hinge that turns the toe's axis up or down slower than this (per radian, near a
-#: vertical hinge) is not flattened.
-MIN_TOE_PITCH_RATE = 0.2
-#: The spine is held to the clip's posture (:attr:`controller.balance.wbc.Weights.spine`) while
-#: the character's capture offset is within SPINE_HELD_M of the reference's, left free
-#: from SPINE_FREE_M, linearly between (:func:`controller.balance.placement.capture_error_m`).
-SPINE_HELD_M = 0.20
-SPINE_FREE_M = 0.40
-#: Correct the swing foot's placement (:mod:`controller.balance.placement`).
-PLACEMENT = True
-#: Keep a foot in the air at the reference's tilt (:mod:`controller.balance.foot_tilt`).
-SWING_FOOT_TILT = True
+from controller.config import DEFAULT, ControllerConfig, Mode
 
 
 def torque_model(model):
@@ -123,12 +78,13 @@ class BalanceControl:
     """One physics step of the controller: targets, foot placement, QP, torques."""
 
     def __init__(self, sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
-                 torque_range_nm):
+                 torque_range_nm, config: ControllerConfig = DEFAULT):
         """``sim``: the torque model (:func:`torque_model`); ``smooth``, ``ref_qvel``,
         ``ref_qacc``: the reference's qpos (T, nq), velocities and accelerations (T, nv);
         ``substeps``: physics steps per frame; ``solver``: the QP
         (:class:`controller.balance.wbc.WholeBodyID`); ``placement``:
-        :class:`controller.balance.placement.FootPlacement`; ``torque_range_nm``: (nu, 2)."""
+        :class:`controller.balance.placement.FootPlacement`; ``torque_range_nm``: (nu, 2);
+        ``config``: the tuning constants (:class:`controller.config.ControllerConfig`)."""
         import mujoco
 
         from controller.qpos import joint_layout
@@ -139,10 +95,13 @@ class BalanceControl:
         self.ref_qvel, self.ref_qacc = ref_qvel, ref_qacc
         self.substeps, self.solver, self.placement = substeps, solver, placement
         self.n_frames = smooth.shape[0]
-        self.kp, self.kd = tracking_gains(sim.nv)
+        self.config = config
+        self.kp, self.kd = tracking_gains(sim.nv, config.tracking)
+        self.max_acceleration = config.tracking.max_acceleration
+        self.min_toe_pitch_rate = config.toes.min_pitch_rate
         layout = joint_layout(sim)
         self.hinge_q, self.hinge_v = layout.qpos_address, layout.dof_address
-        margin = np.deg2rad(LIMIT_MARGIN_DEG)
+        margin = np.deg2rad(config.tracking.limit_margin_deg)
         low, high = np.deg2rad(layout.range_deg.T)
         self.low, self.high = low + margin, high - margin
         self.low_nm, self.high_nm = (np.ascontiguousarray(a)
@@ -152,8 +111,8 @@ class BalanceControl:
         self.qdd_ref = np.empty(sim.nv)
         self.qdd_des = np.empty(sim.nv)
         self.err = np.zeros(sim.nv)
-        self.foot_tilt = (SwingFootTilt(sim, smooth, placement.ankle) if SWING_FOOT_TILT
-                          else None)
+        self.foot_tilt = (SwingFootTilt(sim, smooth, placement.ankle, config)
+                          if config.foot_tilt.enabled else None)
         self.toes = {b for b in range(sim.nbody)
                      if "toes" in (mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_BODY, b) or "")}
         # (body, hinge, its qpos address, capsule) of each toe with one hinge
@@ -168,7 +127,8 @@ class BalanceControl:
                                         capsules[0]))
 
     def _excluded(self, how: str, frame: int):
-        """The bodies whose floor contacts the plan does not lean on (see :data:`MODES`)."""
+        """The bodies whose floor contacts the plan does not lean on
+        (:attr:`controller.config.Mode.swing_contacts_excluded`)."""
         if how == "none":
             return ()
         swing = self.placement.swing_bodies(frame)
@@ -187,8 +147,8 @@ class BalanceControl:
         frame = min(int(round(s)), n_frames - 1)
         floor = floor_contacts(sim, data)
         floor_bodies = floor[1].tolist()
-        if PLACEMENT:
-            gain = mode.placement_gain if gain is None else gain
+        if self.config.placement.enabled:
+            gain = self.config.mode_gain(mode) if gain is None else gain
             self.placement.adjust(data, frame, q_ref, gain, mode.swing_clearance_m,
                                   floor_bodies)
         if self.foot_tilt is not None:
@@ -198,8 +158,8 @@ class BalanceControl:
         clip_targets(q_ref, qd_ref, qdd_ref, self.hinge_q, self.hinge_v, self.low, self.high)
         self._mj_differentiatePos(sim, self.err, 1.0, data.qpos, q_ref)
         desired_acceleration(qdd_ref, self.kp, self.err, self.kd, qd_ref, data.qvel,
-                             MAX_ACCELERATION, self.qdd_des)
-        held = self._spine_held(data) if mode.spine_held else 0.0
+                             self.max_acceleration, self.qdd_des)
+        held = spine_held(data, self.config.spine) if mode.spine_held else 0.0
         tau = self.solver.torques(
             data, self.qdd_des, exclude=self._excluded(mode.swing_contacts_excluded, frame),
             floor=floor, spine_held=held)
@@ -207,16 +167,6 @@ class BalanceControl:
         data.ctrl[:] = applied
         self._mj_step2(sim, data)
         return applied, tau
-
-    @staticmethod
-    def _spine_held(data) -> float:
-        """How firmly the spine is held to the clip's posture, 0 to 1, by the difference
-        between the character's and the reference's capture offsets (the state's)."""
-        error = capture_error_m(data)
-        if not error.size:
-            return 0.0
-        return min(1.0, max(0.0, (SPINE_FREE_M - float(error[0]))
-                            / (SPINE_FREE_M - SPINE_HELD_M)))
 
     def _flatten_toes(self, data, q_ref, floor_bodies) -> None:
         """A toe pressed on the floor yields until it lies flat: its target in ``q_ref``
@@ -237,24 +187,37 @@ class BalanceControl:
             dx, dy, dz = xmat[2], xmat[5], xmat[8]
             ax, ay, _ = data.xaxis[hinge]
             rate = ax * dy - ay * dx
-            if abs(rate) >= MIN_TOE_PITCH_RATE:
+            if abs(rate) >= self.min_toe_pitch_rate:
                 q_ref[qadr] = data.qpos[qadr] - dz / rate
 
 
-def tracking_gains(nv: int):
+def spine_held(data, spine) -> float:
+    """How firmly the spine is held to the clip's posture, 0 to 1, by the difference
+    between the character's and the reference's capture offsets (the state's): 1 within
+    ``spine.held_m`` (:class:`controller.config.sections.SpineConfig`), 0 from
+    ``spine.free_m``, linearly between."""
+    error = capture_error_m(data)
+    if not error.size:
+        return 0.0
+    return min(1.0, max(0.0, (spine.free_m - float(error[0]))
+                        / (spine.free_m - spine.held_m)))
+
+
+def tracking_gains(nv: int, tracking=DEFAULT.tracking):
     """The tracking's stiffness and damping per degree of freedom, (nv,) each: the hinges
-    at :data:`JOINT_HZ`, the root's rotation and height at :data:`ROOT_ROTATION_HZ` and
-    :data:`ROOT_HEIGHT_HZ`, its horizontal position damped only."""
+    at ``tracking.joint_hz``, the root's rotation and height at ``root_rotation_hz`` and
+    ``root_height_hz``, its horizontal position damped only
+    (:class:`controller.config.sections.TrackingConfig`)."""
 
     def pd(hz):
         w = 2 * math.pi * hz
-        return w * w, 2 * DAMPING_RATIO * w
+        return w * w, 2 * tracking.damping_ratio * w
 
     kp = np.empty(nv)
     kd = np.empty(nv)
-    kp[6:], kd[6:] = pd(JOINT_HZ)
-    kp[3:6], kd[3:6] = pd(ROOT_ROTATION_HZ)
-    kp[2], kd[2] = pd(ROOT_HEIGHT_HZ)
-    kp[:2], kd[:2] = 0.0, ROOT_HORIZONTAL_DAMPING
+    kp[6:], kd[6:] = pd(tracking.joint_hz)
+    kp[3:6], kd[3:6] = pd(tracking.root_rotation_hz)
+    kp[2], kd[2] = pd(tracking.root_height_hz)
+    kp[:2], kd[:2] = 0.0, tracking.root_horizontal_damping_per_s
     return kp, kd
 

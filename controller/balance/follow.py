@@ -9,8 +9,8 @@ no actuator and ``xfrc_applied`` is never written. Before the run, :func:`follow
 the reference (:func:`prepared_reference`): marker dropouts filled
 (:mod:`controller.dropouts`: 16_15's left arm reads zero for its first 2 frames, then
 jumps by 76 degrees), low-passed at 12 Hz (mocap glitches are not targets), re-anchored in
-height so that its first frame's lowest point is :data:`START_DEPTH_M` into the floor
-(mocap feet hover by centimetres), and every standing frame grounded
+height so that its first frame's lowest point is 1 mm (``reference.start_depth_m``) into
+the floor (mocap feet hover by centimetres), and every standing frame grounded
 (:mod:`controller.grounding`).
 
 Every 0.5 s (0.25 s after a choice whose rollout strays) the foot-placement gain is chosen
@@ -21,9 +21,9 @@ frames, which are taken from it rather than simulated again, and with ``processe
 rollouts run side by side (:mod:`controller.balance.lookahead`: the same run either way). Where
 the character still gets into trouble (pelvis or head well below the reference's, or
 tilted), a backtracking search (:mod:`controller.balance.search`, after SAMCON) runs the
-last segments again in other modes (:data:`controller.balance.control.MODES`: placement
-gain, swing clearance, which swing-foot contacts the plan leans on) from their saved
-states. The controller's balance is thin (which walks it gets through changes with these
+last segments again in other modes (:attr:`controller.config.ControllerConfig.modes`:
+placement gain, swing clearance, which swing-foot contacts the plan leans on) from their
+saved states. The controller's balance is thin (which walks it gets through changes with these
 choices), and the search buys robustness where it is needed, at the cost of the segments
 it runs again (``simulated_steps``).
 
@@ -31,12 +31,14 @@ The run is a :class:`controller.balance.run.BalanceRun`: the simulated state and
 frame by frame, and the torques applied at every step, which
 :func:`controller.balance.run.replay` runs open-loop from the same start to the same
 motion. The controller has no randomness: the ``seed`` is recorded, and the same inputs
-give the same run.
+give the same run. Every tuning constant is a field of the
+:class:`controller.config.ControllerConfig` the run is given (and records): the same
+configuration and reference give the same run.
 
 The character has **fallen** when its pelvis or head is below half its standing height
 while the reference's is not, and more than a tenth of that height below the reference's
-(:mod:`controller.falls`); the simulation then runs
-:data:`AFTER_FALL_S` more and stops (later frames are NaN).
+(:mod:`controller.falls`); the simulation then runs ``falls.after_fall_s`` (1 s) more and
+stops (later frames are NaN).
 """
 
 from __future__ import annotations
@@ -46,26 +48,15 @@ import time
 
 import numpy as np
 
-from controller.balance.control import (
-    MODES,
-    PLACEMENT,
-    BalanceControl,
-    actuator_torque_range,
-    torque_model,
-)
-from controller.balance.gain_selection import SELECT_GAINS, GainSelector
+from controller.balance.control import BalanceControl, actuator_torque_range, torque_model
+from controller.balance.gain_selection import GainSelector
 from controller.balance.run import BalanceRun, FrameLog
 from controller.balance.search import Search, up_axis_z
-
-#: Seconds simulated after a fall before the run stops.
-AFTER_FALL_S = 1.0
-#: The start's lowest point is this far into the floor (a contact from the first step).
-START_DEPTH_M = 0.001
+from controller.config import DEFAULT, ControllerConfig
 
 
-def follow(model, reference_qpos, fps: float, *, seed: int = 0,
-           progress: bool = False, search_budget: float | None = None,
-           processes: int = 1) -> BalanceRun:
+def follow(model, reference_qpos, fps: float, *, config: ControllerConfig = DEFAULT,
+           seed: int = 0, progress: bool = False, processes: int = 1) -> BalanceRun:
     """Simulate the free-root humanoid balancing while it follows a reference.
 
     Parameters
@@ -76,13 +67,13 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         From :func:`controller.to_qpos`.
     fps : float
         Frames per second of the reference.
+    config : controller.config.ControllerConfig
+        Every tuning constant (the search's budget ``search.budget``, in multiples of the
+        reference's physics steps: 0, no search); recorded in the run.
     seed : int
         Recorded; the controller is deterministic.
     progress : bool
         Show a progress bar (tqdm, off when not a terminal).
-    search_budget : float, optional
-        The search's budget in multiples of the reference's physics steps (default
-        :data:`controller.balance.search.SEARCH_BUDGET`; 0: no search).
     processes : int
         1 or 2: the foot-placement gain's lookahead rollouts run one after the other, or
         side by side in this process and a forked helper (:mod:`controller.balance.lookahead`).
@@ -104,17 +95,18 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     from controller.pose_error import reference_errors
     from controller.qpos import free_joint
     from controller.raw_clock import RawStepClock
-    from controller.tracking.servo import MAX_STEP_S, physics_substeps
+    from controller.tracking.servo import physics_substeps
     from upm.core.progress import progress as progress_bar
 
     if processes not in (1, 2):
         raise ValueError(f"the balance controller runs on 1 or 2 processes, not {processes!r}")
     sim = torque_model(model)
-    substeps = physics_substeps(fps, min(MAX_STEP_S, float(model.opt.timestep)))
+    substeps = physics_substeps(fps, min(config.step.max_step_s, float(model.opt.timestep)))
     dt = 1.0 / (fps * substeps)
     sim.opt.timestep = dt
     data = mujoco.MjData(sim)
-    ref, smooth, ref_qvel, ref_qacc = prepared_reference(sim, reference_qpos, fps, data)
+    ref, smooth, ref_qvel, ref_qacc = prepared_reference(sim, reference_qpos, fps, data,
+                                                         config)
     n_frames = ref.shape[0]
     start = smooth[0].copy()
     start_qvel = ref_qvel[0].copy()
@@ -124,10 +116,10 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
 
     torque_range_nm = actuator_torque_range(sim)
     joint_dofs = sim.jnt_dofadr[sim.actuator_trnid[:, 0]]
-    solver = WholeBodyID(sim, joint_dofs, torque_range_nm)
-    placement = FootPlacement(sim, ref, fps)
+    solver = WholeBodyID(sim, joint_dofs, torque_range_nm, config)
+    placement = FootPlacement(sim, ref, fps, config)
     control = BalanceControl(sim, smooth, ref_qvel, ref_qacc, substeps, solver, placement,
-                             torque_range_nm)
+                             torque_range_nm, config)
     pelvis_body = int(sim.jnt_bodyid[free_joint(sim)])
     head_site = mujoco.mj_name2id(sim, mujoco.mjtObj.mjOBJ_SITE, "head_end")
     figures = body_figures(model)
@@ -147,14 +139,16 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
     # the clock starts and before the helper process is forked (it inherits them).
     scratch = mujoco.MjData(sim)
     mujoco.mj_copyData(scratch, sim, data)
-    control.step(scratch, 0, MODES[0])
+    control.step(scratch, 0, config.modes[0])
     del scratch
     root_q = int(sim.jnt_qposadr[free_joint(sim)])
     search = Search(sim, n_frames, fps, substeps, (ref_pelvis, ref_head),
-                    (pelvis_body, head_site), search_budget,
-                    ref_up_z=up_axis_z(ref[:, root_q + 3:root_q + 7]))
-    selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes)
-                if len(SELECT_GAINS) > 1 and PLACEMENT else None)
+                    (pelvis_body, head_site), ref_up_z=up_axis_z(ref[:, root_q + 3:root_q + 7]),
+                    config=config)
+    selector = (GainSelector(control, ref_pelvis, pelvis_body, fps, n_frames, processes,
+                             config)
+                if len(config.gains) > 1 and config.placement.enabled else None)
+    modes = config.modes
 
     bar = progress_bar(total=n_frames - 1, desc="balance", unit="frame",
                        disable=None if progress else True)
@@ -166,8 +160,8 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         while t < n_frames:
             raw.tick()
             search.enter(data, t)
-            mode = MODES[search.mode(t)]
-            gain = mode.placement_gain
+            mode = modes[search.mode(t)]
+            gain = config.mode_gain(mode)
             recorded = None
             if selector is not None and search.mode(t) == 0:
                 gain = selector.gain_at(data, t, gain)  # chosen by lookahead
@@ -200,9 +194,9 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
                     break
             log.record(data, t, search.troubled(data, t))
             if fall is None and fallen(data.xpos[pelvis_body, 2], data.site_xpos[head_site, 2],
-                                       ref_pelvis[t], ref_head[t], figures):
+                                       ref_pelvis[t], ref_head[t], figures, config.falls):
                 fall = t
-                stop_frame = min(n_frames, t + 1 + int(round(AFTER_FALL_S * fps)))
+                stop_frame = min(n_frames, t + 1 + int(round(config.falls.after_fall_s * fps)))
             if t + 1 >= stop_frame:
                 break
             t += 1
@@ -230,16 +224,19 @@ def follow(model, reference_qpos, fps: float, *, seed: int = 0,
         actuator_names=tuple(mujoco.mj_id2name(sim, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
                              for i in range(sim.nu)),
         torque_range_nm=torque_range_nm,
-        actuator_velocity=log.actuator_velocity,
+        actuator_velocity=log.actuator_velocity, config=config,
     )
 
 
-def prepared_reference(sim, reference_qpos, fps: float, data):
+def prepared_reference(sim, reference_qpos, fps: float, data,
+                       config: ControllerConfig = DEFAULT):
     """The reference as the controller follows it.
 
-    Marker dropouts filled, hinges unwrapped, low-passed (the targets), shifted in height
-    so that the first frame's lowest point is :data:`START_DEPTH_M` into the floor, and
-    every standing frame grounded (:func:`controller.grounding.ground_reference`).
+    Marker dropouts filled (``dropouts``), hinges unwrapped, low-passed (the targets, at
+    ``reference.lowpass_hz``), shifted in height so that the first frame's lowest point is
+    ``reference.start_depth_m`` into the floor, and every standing frame grounded
+    (:func:`controller.grounding.ground_reference`, ``grounding``; the feet down by
+    ``placement``'s test).
 
     Parameters
     ----------
@@ -249,6 +246,7 @@ def prepared_reference(sim, reference_qpos, fps: float, data):
     fps : float
     data : mujoco.MjData
         Scratch data of ``sim`` (its state is overwritten).
+    config : controller.config.ControllerConfig
 
     Returns
     -------
@@ -263,20 +261,20 @@ def prepared_reference(sim, reference_qpos, fps: float, data):
     from controller.dropouts import fill_dropouts
     from controller.grounding import floor_clearance, ground_reference
 
-    ref = unwrap_hinges(sim, fill_dropouts(sim, reference_qpos)[0])
+    ref = unwrap_hinges(sim, fill_dropouts(sim, reference_qpos, config.dropouts)[0])
     if ref.shape[0] < 2:
         raise ValueError("following needs a reference of at least 2 frames")
     if not np.all(np.isfinite(ref)):
         raise ValueError("the reference has non-finite values")
-    smooth = lowpass_qpos(sim, ref, fps)
+    smooth = lowpass_qpos(sim, ref, fps, config.reference.lowpass_hz)
     # Start with the lowest point on the floor (mocap feet hover or sink by centimetres),
     # and re-anchor the reference's height by the same shift ...
-    height_shift = -floor_clearance(sim, data, smooth[0]) - START_DEPTH_M
+    height_shift = -floor_clearance(sim, data, smooth[0]) - config.reference.start_depth_m
     ref[:, 2] += height_shift
     smooth[:, 2] += height_shift
     # ... and every standing frame on the floor
-    down = FootPlacement(sim, ref, fps).ref_down
-    smooth, ground_shift = ground_reference(sim, smooth, fps, down)
+    down = FootPlacement(sim, ref, fps, config).ref_down
+    smooth, ground_shift = ground_reference(sim, smooth, fps, down, config.grounding)
     ref[:, 2] += ground_shift
     ref_qvel, ref_qacc = finite_differences(sim, smooth, fps)
     return ref, smooth, ref_qvel, ref_qacc

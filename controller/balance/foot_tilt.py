@@ -24,12 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from controller.balance.leg_kernels import tilt_ankle
-
-#: Damping of the ankle's least-squares turn (per radian squared): it keeps the solve
-#: regular where the hinge axes line up, and is small, so that the CMU ankle's second
-#: hinge, near vertical, still turns the foot about the shank by a few degrees where the
-#: roll asks for it (that hinge has little roll to give: the roll is put back in part).
-DAMPING = 1e-3
+from controller.config import DEFAULT, ControllerConfig
 
 
 class SwingFootTilt:
@@ -43,6 +38,8 @@ class SwingFootTilt:
     foot_bodies : sequence of int
         The foot (ankle) body of each side, in :class:`controller.balance.placement.FootPlacement`
         order (left, right).
+    config : controller.config.ControllerConfig
+        Its ``foot_tilt.damping``: the damping of the ankle's least-squares turn.
 
     Attributes
     ----------
@@ -50,7 +47,8 @@ class SwingFootTilt:
         The world vertical in each foot's frame, per reference frame.
     """
 
-    def __init__(self, model, reference_qpos, foot_bodies):
+    def __init__(self, model, reference_qpos, foot_bodies,
+                 config: ControllerConfig = DEFAULT):
         import mujoco
 
         self.foot_bodies = [int(b) for b in foot_bodies]
@@ -70,7 +68,8 @@ class SwingFootTilt:
             mujoco.mj_kinematics(model, data)
             # row 2 of the body's rotation: the world z axis in the body's frame
             self.up[t] = data.xmat[self.foot_bodies].reshape(-1, 3, 3)[:, 2, :]
-        self._damping = [DAMPING * np.eye(len(h)) for h in self.hinges]
+        damping = config.foot_tilt.damping
+        self._damping = [damping * np.eye(len(h)) for h in self.hinges]
         # the compiled kernel loads now, not at the first step with a foot in the air
         # (after the controller's clock has started)
         tilt_ankle(data.xmat[self.foot_bodies[0]], self.up[0, 0], data.xaxis, self.hinges[0],

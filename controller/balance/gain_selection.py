@@ -1,54 +1,50 @@
 """The foot-placement gain of the balance controller's default mode, chosen by lookahead.
 
-Every :data:`SELECT_EVERY_S` the gain is chosen among :data:`SELECT_GAINS` by rolling the
-same controller out :data:`LOOKAHEAD_S` ahead from a copy of the state and keeping the
-gain whose pelvis stays nearest the reference's height and upright
-(:mod:`controller.balance.lookahead`). Where even the chosen gain's rollout strays (its cost over
-:data:`REFINE_COST`) the gain is chosen again half-way to the next choice: the body is
-heading for trouble, and a choice from a state 0.25 s on sees it sooner.
+Every ``lookahead.every_s`` (0.5 s) the gain is chosen among the configuration's
+:attr:`controller.config.ControllerConfig.gains` (``placement.gain`` and
+``lookahead.other_gains``) by rolling the same controller out ``lookahead.horizon_s``
+(1 s) ahead from a copy of the state and keeping the gain whose pelvis stays nearest the
+reference's height and upright (:mod:`controller.balance.lookahead`). Where even the chosen
+gain's rollout strays (its cost over ``lookahead.refine_cost``) the gain is chosen again
+half-way to the next choice: the body is heading for trouble, and a choice from a state
+0.25 s on sees it sooner.
 """
 
 from __future__ import annotations
 
 import math
 
-from controller.balance.control import MODES
-
-#: Foot-placement gains chosen among by short rollouts for the default mode ...
-SELECT_GAINS = (0.3, 0.6)
-#: ... every this many seconds ...
-SELECT_EVERY_S = 0.5
-#: ... each rolled out this far ahead ...
-LOOKAHEAD_S = 1.0
-#: ... and chosen again half-way to the next choice where the chosen gain's rollout cost
-#: more than this (:func:`controller.balance.lookahead.rollout_cost`: a clean 1 s of a walk costs
-#: about 1, mostly the pace's error; one heading for a fall, tens).
-REFINE_COST = 1.5
+from controller.config import DEFAULT, ControllerConfig
 
 
 class GainSelector:
-    """Every :data:`SELECT_EVERY_S` (and half-way on where the choice's rollout cost more
-    than :data:`REFINE_COST`), the foot-placement gain of :data:`SELECT_GAINS` whose
-    :data:`LOOKAHEAD_S` rollout (the same controller, from a copy of the state) keeps the
-    pelvis nearest the reference's height and upright, and the pace nearest the
-    reference's (:func:`controller.balance.lookahead.rollout_cost`); the first on ties. The rollouts
-    run on ``processes`` processes (:class:`controller.balance.lookahead.Lookahead`)."""
+    """Every ``lookahead.every_s`` (and half-way on where the choice's rollout cost more
+    than ``lookahead.refine_cost``), the foot-placement gain of ``config.gains`` whose
+    ``lookahead.horizon_s`` rollout (the same controller, from a copy of the state) keeps
+    the pelvis nearest the reference's height and upright, and the pace nearest the
+    reference's (:func:`controller.balance.lookahead.rollout_cost`); the first on ties. The
+    rollouts run on ``processes`` processes (:class:`controller.balance.lookahead.Lookahead`),
+    in the configuration's default mode (its first)."""
 
     def __init__(self, control, ref_pelvis, pelvis_body: int, fps: float, n_frames: int,
-                 processes: int = 1):
+                 processes: int = 1, config: ControllerConfig = DEFAULT):
         from controller.balance.lookahead import Lookahead, Recording
 
+        settings = config.lookahead
+        self.gains = config.gains
+        self.default_mode = config.modes[0]
+        self.refine_cost = settings.refine_cost
         self.n_frames = n_frames
-        self.every_frames = max(1, int(round(SELECT_EVERY_S * fps)))
-        self.lookahead_frames = max(1, int(round(LOOKAHEAD_S * fps)))
-        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes)
+        self.every_frames = max(1, int(round(settings.every_s * fps)))
+        self.lookahead_frames = max(1, int(round(settings.horizon_s * fps)))
+        self.lookahead = Lookahead(control, ref_pelvis, pelvis_body, processes, config)
         # on one process the chosen rollout is recorded whole: the next choice goes on
         # from its second half instead of simulating it again
         self.resumes = processes == 1
         capacity = (self.lookahead_frames if self.resumes
                     else min(self.every_frames, self.lookahead_frames))
         self.recordings = [Recording(control.sim, capacity, control.substeps)
-                           for _ in SELECT_GAINS]
+                           for _ in self.gains]
         self.chain = None
         self.last_choice = 0
         self.last_cost = math.inf
@@ -70,7 +66,7 @@ class GainSelector:
         if first not in self._gains:
             if first == t - 1:
                 self._gains[first] = self.choose(data, first)
-                self._refined[first] = self.last_cost > REFINE_COST
+                self._refined[first] = self.last_cost > self.refine_cost
             else:
                 self._gains[first] = fallback
         return self._gains[first]
@@ -90,7 +86,7 @@ class GainSelector:
         last = min(self.n_frames - 1, frame + self.lookahead_frames)
         resume = self._resumable(frame)
         self.forget(keep=resume)
-        costs = self.lookahead.costs(data, frame, last, SELECT_GAINS, MODES[0],
+        costs = self.lookahead.costs(data, frame, last, self.gains, self.default_mode,
                                      self.recordings, here=self.last_choice, resume=resume)
         self.chain = frame
         best, best_cost = 0, math.inf
@@ -98,7 +94,7 @@ class GainSelector:
             if cost < best_cost:
                 best, best_cost = i, cost
         self.last_choice, self.last_cost = best, best_cost
-        return SELECT_GAINS[best]
+        return self.gains[best]
 
     def _resumable(self, frame: int) -> int | None:
         """The last choice's gain, if its rollout can go on from ``frame`` (one process,
@@ -109,7 +105,7 @@ class GainSelector:
         recording = self.recordings[self.last_choice]
         start = recording.start_frame
         ended = min(self.n_frames - 1, start + self.lookahead_frames)
-        if (start < 0 or recording.gain != SELECT_GAINS[self.last_choice] or ended <= frame
+        if (start < 0 or recording.gain != self.gains[self.last_choice] or ended <= frame
                 or recording.frames != ended - start or not math.isfinite(self.last_cost)):
             return None
         recording.advance(frame - start)

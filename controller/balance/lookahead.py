@@ -34,10 +34,7 @@ import signal
 
 import numpy as np
 
-#: Weight of the root's horizontal velocity error in a rollout's cost, s (m/s to m): a
-#: small term that tells apart rollouts that stay up equally well by how closely they keep
-#: the reference's pace and direction (on 02_02 it picks the gain that needs no search).
-VELOCITY_WEIGHT_S = 0.03
+from controller.config import DEFAULT, ControllerConfig
 
 
 class Recording:
@@ -150,12 +147,13 @@ def _warnings(data) -> int:
 def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
                  ref_pelvis_m, pelvis_body: int,
                  recording: Recording | None = None,
-                 resume: bool = False) -> tuple[float, int]:
+                 resume: bool = False, velocity_weight_s: float = DEFAULT.lookahead
+                 .velocity_weight_s) -> tuple[float, int]:
     """How far one rollout strays: the sum over frames ``frame + 1 .. last`` of how far
     the pelvis is below the reference's (m, zero when above), one minus its up axis's
-    vertical component, and :data:`VELOCITY_WEIGHT_S` times the root's horizontal
-    velocity error (m/s); ``inf`` when the simulation fails. Returns the cost and the
-    physics steps simulated.
+    vertical component, and ``velocity_weight_s`` times the root's horizontal velocity
+    error (m/s); ``inf`` when the simulation fails. Returns the cost and the physics steps
+    simulated.
 
     Parameters
     ----------
@@ -177,6 +175,8 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
         this gain): they are not simulated again, the rollout goes on after the last of
         them (restored as the run restores a frame), and their cost terms are summed in
         order (the same cost as simulating them again, bit for bit).
+    velocity_weight_s : float
+        The velocity error's weight, s (``lookahead.velocity_weight_s``).
     """
     import mujoco
 
@@ -191,7 +191,7 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
         done = recording.frames
         for i in range(done):
             cost += recording.cost_terms[i, 0]
-            if VELOCITY_WEIGHT_S:
+            if velocity_weight_s:
                 cost += recording.cost_terms[i, 1]
         restore_frame(sim, scratch, recording.states[done - 1],
                       recording.ctrl[done - 1, last_step], recording.userdata[done - 1])
@@ -224,9 +224,9 @@ def rollout_cost(control, scratch, frame: int, last: int, gain: float, mode,
         upright = max(0.0, low) + tilt
         cost += upright
         pace = 0.0
-        if VELOCITY_WEIGHT_S:
+        if velocity_weight_s:
             dv = scratch.qvel[:2] - control.ref_qvel[t, :2]
-            pace = VELOCITY_WEIGHT_S * math.hypot(dv[0], dv[1])
+            pace = velocity_weight_s * math.hypot(dv[0], dv[1])
             cost += pace
         if keep and recording_on:
             recording.cost_terms[i] = upright, pace
@@ -254,11 +254,14 @@ class Lookahead:
     processes : int
         1: every rollout here, one after the other; 2: one gain's here (the caller's
         ``here``) and the others in a helper process at the same time (same results).
-        The helper is forked
-        at the first call that needs it and ends with :meth:`close` (or this process).
+        The helper is forked at the first call that needs it and ends with :meth:`close`
+        (or this process).
+    config : controller.config.ControllerConfig
+        Its ``lookahead.velocity_weight_s`` (:func:`rollout_cost`).
     """
 
-    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1):
+    def __init__(self, control, ref_pelvis_m, pelvis_body: int, processes: int = 1,
+                 config: ControllerConfig = DEFAULT):
         import mujoco
 
         if processes not in (1, 2):
@@ -270,10 +273,9 @@ class Lookahead:
         self.ref_pelvis_m = ref_pelvis_m
         self.pelvis_body = pelvis_body
         self.processes = processes
+        self.velocity_weight_s = config.lookahead.velocity_weight_s
         self.scratch = mujoco.MjData(control.sim)
-        self._helper = None
-        self._pipe = None
-        self._busy = False
+        self._helper, self._pipe, self._busy = None, None, False
         #: physics steps the rollouts simulated, in this process and in the helper
         self.steps = 0
 
@@ -320,10 +322,10 @@ class Lookahead:
                     recordings[i].unpack(packed[n])
         return out
 
-    def _cost(self, frame, last, gain, mode, recording=None,
-              resume: bool = False) -> float:
+    def _cost(self, frame, last, gain, mode, recording=None, resume: bool = False) -> float:
         cost, steps = rollout_cost(self.control, self.scratch, frame, last, gain, mode,
-                                   self.ref_pelvis_m, self.pelvis_body, recording, resume)
+                                   self.ref_pelvis_m, self.pelvis_body, recording, resume,
+                                   self.velocity_weight_s)
         self.steps += steps
         return cost
 
@@ -389,8 +391,7 @@ class Lookahead:
             self._helper.kill()
             self._helper.join()
         self._pipe.close()
-        self._helper = self._pipe = None
-        self._busy = False
+        self._helper, self._pipe, self._busy = None, None, False
 
     def __enter__(self):
         return self

@@ -24,25 +24,8 @@ import numpy as np
 
 from controller.balance.leg_kernels import capture_shift, move_point
 from controller.checks.contacts import floor_contacts
+from controller.config import DEFAULT, ControllerConfig
 
-#: Share of the capture-offset difference the swing foot is moved by.
-PLACEMENT_GAIN = 0.3
-#: The largest shift of the swing foot, metres.
-MAX_SHIFT_M = 0.25
-#: A reference foot is down when its ankle moves slower than this ...
-FOOT_DOWN_SPEED_MPS = 0.8
-#: ... and is within this height of its lowest in the motion.
-FOOT_DOWN_HEIGHT_M = 0.08
-#: Also keep the swing ankle at least at the reference's height (hip and knee).
-SWING_HEIGHT = True
-#: Extra height of the swing ankle above the reference's while the reference swings it,
-#: metres (the default; the balance controller's modes choose their own).
-SWING_CLEARANCE_M = 0.0
-#: Damping of the swing leg's inverse kinematics, m: a near-singular leg (a straight knee)
-#: is not asked for a huge turn (:func:`controller.balance.leg_kernels.damped_least_squares`).
-IK_DAMPING_M = 0.05
-#: The largest change of one swing-leg joint's target, radians.
-MAX_TURN_RAD = math.radians(45.0)
 _SIDES = ("l", "r")
 
 
@@ -54,11 +37,14 @@ class FootPlacement:
     model : mujoco.MjModel
     reference_qpos : ndarray, shape (T, nq)
     fps : float
-    gain : float, optional
-        Default :data:`PLACEMENT_GAIN`.
+    config : controller.config.ControllerConfig
+        Its ``placement`` section (:class:`controller.config.sections.PlacementConfig`):
+        the default gain, the largest shift, when a reference foot is down, the swing
+        height and clearance, the leg's inverse kinematics.
     """
 
-    def __init__(self, model, reference_qpos, fps: float, gain: float | None = None):
+    def __init__(self, model, reference_qpos, fps: float,
+                 config: ControllerConfig = DEFAULT):
         import mujoco
 
         self._mj_subtreeVel, self._mj_jac = mujoco.mj_subtreeVel, mujoco.mj_jac
@@ -70,7 +56,10 @@ class FootPlacement:
             return i
 
         self.model = model
-        self.gain = float(PLACEMENT_GAIN if gain is None else gain)
+        settings = config.placement
+        self.settings = settings
+        self.gain = float(settings.gain)
+        self.max_turn_rad = math.radians(settings.max_turn_deg)
         self.ankle = np.array([body(f"{s}foot") for s in _SIDES])
         self.foot_bodies = [
             {b for b in range(model.nbody) if _descends(model, b, body(f"{s}foot"))}
@@ -83,7 +72,7 @@ class FootPlacement:
             qadr = [int(model.jnt_qposadr[j]) for j in range(model.njnt)
                     if (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "")
                     .startswith(f"{s}femur_")]
-            if SWING_HEIGHT:
+            if settings.swing_height:
                 knee = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"{s}tibia_rx")
                 dofs.append(int(model.jnt_dofadr[knee]))
                 qadr.append(int(model.jnt_qposadr[knee]))
@@ -110,8 +99,8 @@ class FootPlacement:
         # the reference's feet on the floor: slow and low (mocap contact detection)
         speed = np.linalg.norm(np.gradient(self.ref_ankle, 1.0 / fps, axis=0), axis=2)
         height = self.ref_ankle[:, :, 2]
-        low = height < height.min(axis=0) + FOOT_DOWN_HEIGHT_M
-        self.ref_down = (speed < FOOT_DOWN_SPEED_MPS) & low  # (T, 2)
+        low = height < height.min(axis=0) + settings.foot_down_height_m
+        self.ref_down = (speed < settings.foot_down_speed_mps) & low  # (T, 2)
         self._down_frames = [np.flatnonzero(self.ref_down[:, side]) for side in range(2)]
         # per frame and side, the nearest frame with that foot down (:meth:`_nearest_down`)
         self.down_frame = np.array([[self._nearest_down(t, side) for side in range(2)]
@@ -163,7 +152,8 @@ class FootPlacement:
         gain : float, optional
             This step's gain (default the placement's own).
         clearance_m : float, optional
-            This step's swing clearance (default :data:`SWING_CLEARANCE_M`).
+            This step's swing clearance (default the configuration's
+            ``placement.swing_clearance_m``).
         floor_bodies : list of int, optional
             The bodies of the state's floor contacts, if already found
             (:func:`controller.checks.contacts.floor_contacts`).
@@ -193,27 +183,29 @@ class FootPlacement:
         # whole fall in 16 of their 42 runs against 8)
         gain = self.gain if gain is None else gain
         down = self.down_frame[frame, stance]
+        settings = self.settings
         shift = capture_shift(
             data.subtree_com[1], data.subtree_linvel[1], xpos[self.ankle[stance]],
             self.ref_com[down], self.ref_com_vel[down],
             self.ref_ankle[down, stance], self.time_constant_s,
-            gain, MAX_SHIFT_M)
+            gain, settings.max_shift_m)
         if gain:
             capture_error_m(data)[:] = math.hypot(shift[0], shift[1]) / gain
         dofs, qadr = self.hips[swing]
         self._mj_jac(self.model, data, self._jacp, None, xpos[self.ankle[swing]],
                      int(self.ankle[swing]))
-        if SWING_HEIGHT:
+        if settings.swing_height:
             # and the ankle at least at the reference's height above the floor (plus a
             # clearance while the reference swings it: a toe that scrapes trips; not
             # lower: a swing foot that lands early lands on its toes, behind the body)
             lift = self.ref_ankle[frame, swing, 2] - xpos[self.ankle[swing], 2]
             if not self.ref_down[frame, swing]:
-                lift += SWING_CLEARANCE_M if clearance_m is None else clearance_m
+                lift += settings.swing_clearance_m if clearance_m is None else clearance_m
             move = np.array((shift[0], shift[1], max(0.0, lift)))
         else:
             move = shift
-        move_point(self._jacp, dofs, move, IK_DAMPING_M, MAX_TURN_RAD, q_ref, qadr)
+        move_point(self._jacp, dofs, move, settings.ik_damping_m, self.max_turn_rad, q_ref,
+                   qadr)
         return shift
 
 
@@ -228,7 +220,7 @@ def _descends(model, body: int, ancestor: int) -> bool:
 def capture_error_m(data) -> np.ndarray:
     """The state's slot (a view, shape (1,) or (0,)) for the length of the difference
     between the character's and the reference's capture offsets at the last
-    single-support step, m (at most ``MAX_SHIFT_M`` over that step's placement gain):
+    single-support step, m (at most ``placement.max_shift_m`` over that step's gain):
     the last entry of ``userdata``, so that a saved state and a rollout from it carry
     it."""
     return data.userdata[-1:]

@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from controller.config import DEFAULT, ControllerConfig
+
 #: The figures of a part of a balance run in the report (besides ``frames``).
 PART_FIELDS = ("fell", "fall_time_s", "error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "heading_error_deg_peak",
@@ -121,7 +123,8 @@ class BalanceTracking:
         from controller.balance.search import frame_modes
 
         run = self.run
-        searched = frame_modes(run.segment_modes, run.n_frames, run.fps)[up] != 0
+        searched = frame_modes(run.segment_modes, run.n_frames, run.fps,
+                               run.config.search.segment_s)[up] != 0
         joint, body = run.joint_error_deg[up], run.body_error_mm[up]
         out = {"search_mode_share": finite_stat(searched, np.mean)}
         for name, frames in (("default_mode", ~searched), ("search_modes", searched)):
@@ -169,7 +172,7 @@ class BalanceTracking:
             "seed": run.seed,
             "fall_frame": run.fall_frame,
             "fall_rule": self.fall_rule,
-            "trouble_rule": trouble_rule(),
+            "trouble_rule": trouble_rule(run.config.search),
             "diverged_frame": run.diverged_frame,
             "warnings": dict(run.warnings),
             "limit_active_frames": int((run.limit_rows > 0).sum()),
@@ -191,15 +194,14 @@ class BalanceTracking:
         }
 
 
-def balance_tracking(model, reference_qpos, fps: float, *, seed: int = 0,
-                     progress: bool = False,
-                     search_budget: float | None = None,
-                     processes: int = 1) -> BalanceTracking:
-    """Run :func:`controller.balance.follow` and wrap it for the report."""
+def balance_tracking(model, reference_qpos, fps: float, *,
+                     config: ControllerConfig = DEFAULT, seed: int = 0,
+                     progress: bool = False, processes: int = 1) -> BalanceTracking:
+    """Run :func:`controller.balance.follow` with ``config`` and wrap it for the report."""
     from controller.balance.follow import follow
     from controller.body import body_figures
     from controller.falls import fall_rule
 
-    run = follow(model, reference_qpos, fps, seed=seed, progress=progress,
-                 search_budget=search_budget, processes=processes)
-    return BalanceTracking(run, fall_rule(body_figures(model)))
+    run = follow(model, reference_qpos, fps, config=config, seed=seed, progress=progress,
+                 processes=processes)
+    return BalanceTracking(run, fall_rule(body_figures(model), config.falls))

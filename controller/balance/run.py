@@ -20,8 +20,8 @@ Per-frame figures (:class:`BalanceRun`):
 - ``torque_nm``, ``torque_saturated``: applied torque per actuator at the frame's last
   step, and whether the controller asked for the joint's whole strength or more (the QP
   keeps its torques within the strength, so a bound it leans on is met to rounding:
-  within :data:`controller.balance.wbc.AT_BOUND` of the strength counts as at it, the share the
-  QP's warm start also reads a bound from);
+  within ``solver.at_bound_share`` of the strength counts as at it, the share the QP's
+  warm start also reads a bound from);
 - ``actuator_velocity``: each actuator's joint velocity at the same step, rad/s: a
   torque that has the velocity's sign does positive work (the joint turns the way it is
   pushed: a muscle across it shortens, where a real one holds less than its isometric
@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.balance.control import torque_model
+from controller.config import DEFAULT, ControllerConfig
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
                "body_error_mm_peak", "root_drift_m", "heading_error_deg_peak",
@@ -98,8 +99,7 @@ class BalanceRun:
         Wall seconds of one raw ``mj_step`` of the same model, timed in bursts while the
         run went on (:class:`controller.raw_clock.RawStepClock`).
     segment_modes : ndarray of int, shape (segments,)
-        The index in :data:`controller.balance.control.MODES` each
-        :data:`controller.balance.search.SEGMENT_S` segment ran in.
+        The index in ``config.modes`` each ``config.search.segment_s`` segment ran in.
     retries : int
         Segments run again by the search.
     simulated_steps : int
@@ -123,6 +123,8 @@ class BalanceRun:
     actuator_velocity : ndarray, shape (T, nu)
         Each actuator's joint velocity at the step of ``torque_nm``, rad/s (0 at the
         first frame, NaN after the run stopped); None where not recorded.
+    config : controller.config.ControllerConfig
+        The tuning constants the run was made with.
     """
 
     fps: float
@@ -163,6 +165,7 @@ class BalanceRun:
     actuator_names: tuple = ()
     torque_range_nm: np.ndarray | None = None
     actuator_velocity: np.ndarray | None = None
+    config: ControllerConfig = DEFAULT
 
     @property
     def steps(self) -> int:

@@ -1,9 +1,11 @@
 """The balance controller's backtracking search over its modes (after SAMCON).
 
 Where the character gets into trouble (pelvis or head well below the reference's, or
-tilted), the search (:class:`Search`) runs the last segments again in other
-:data:`controller.balance.control.MODES` from their saved states, and records each trouble
-it worked on (:class:`SearchTrouble`).
+tilted), the search (:class:`Search`) runs the last segments again in other modes (the
+configuration's :attr:`controller.config.ControllerConfig.modes`) from their saved states,
+and records each trouble it worked on (:class:`SearchTrouble`). Its constants are the
+configuration's ``search`` section (:class:`controller.config.sections.SearchConfig`),
+named here ``search.key``.
 """
 
 from __future__ import annotations
@@ -14,42 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from controller.balance.control import MODES
-
-#: The search: each segment of this many seconds runs in one mode ...
-SEGMENT_S = 0.25
-#: ... a segment in trouble (pelvis this far below the reference's, or its up axis this
-#: far from vertical and TROUBLE_TILT_MARGIN_DEG beyond the reference's tilt, or the head
-#: this far below the reference's: bent over at the waist with the pelvis still up) is run
-#: again in the next mode, then its predecessors, up to
-#: this many segments back (4 s: on 16_15 -> 16_15 the attempt that stands differs from
-#: the one that falls in a segment 3.5 s before the trouble; 10 s made the same runs) ...
-TROUBLE_DROP_M = 0.12
-TROUBLE_UP = 0.8
-TROUBLE_HEAD_DROP_M = 0.25
-#: A pelvis tilted past TROUBLE_UP is trouble only where it is tilted this much further
-#: than the reference's, degrees: 02_10 (wash self) bends over with its pelvis 43 deg from
-#: vertical, and the test, which did not look at the reference, sent the search after the
-#: clip's own posture. Where the reference tilts less than about 22 deg (every frame of
-#: issue 10's 315 references: at most 14.3 deg, 05_01) nothing changes.
-TROUBLE_TILT_MARGIN_DEG = 15.0
-MAX_BACKTRACK = 16
-#: ... and the segments after a changed one keep its mode for this long ...
-STICKY_S = 2.0
-#: ... within this many times the reference's physics steps in all (30, not 15: on issue
-#: 10's rows every exact reference stands, the 02 walk sequence with `upm` windows too,
-#: which falls at 15 with the budget spent; offset seeds 11-20, not looked at when 30 was
-#: chosen, fall 11 times in 110 against 25, with the search before its sweep; only runs
-#: that spend more than 15 cost more).
-SEARCH_BUDGET = 30.0
-#: The modes the sweep tries, in this order (indices into MODES, ascending); the others
-#: only in the combinations. In the sweep the last (no contact of the swing foot planned)
-#: ran 43 % of the rerun work and got past 13 % of the troubles, and mode 2 (gain 0.6, the
-#: swing foot 2 cm up) then ran 14 % and got past 6 %. Over issue 10's runs, seeds 0-20,
-#: each left out in turn made as many falls (8 whole, 0 cut); the last with 18 % fewer
-#: segments run again, mode 2 with 2 % more whole and 15 % fewer cut, and 35_01 followed
-#: closer (its median body error 52 -> 43.5 mm).
-SWEEP_MODES = (1, 3, 4)
+from controller.config import DEFAULT, ControllerConfig
 
 
 class SearchTrouble(NamedTuple):
@@ -74,7 +41,7 @@ class SearchTrouble(NamedTuple):
         ``"got past"`` (an attempt went on beyond the segment in trouble), ``"budget
         spent"`` or ``"no mode within reach"`` (the search gave up and the run went on
         from the attempt that got furthest).
-    restarts_by_mode, rerun_s_by_mode : tuple, one entry per :data:`MODES` each
+    restarts_by_mode, rerun_s_by_mode : tuple, one entry per mode each
         ``retries`` and ``rerun_s`` by the mode each restart ran its first segment in
         (the segment it changed).
     last_mode : int or None
@@ -94,18 +61,18 @@ class SearchTrouble(NamedTuple):
 
 
 class Search:
-    """Backtracking over the controller's :data:`MODES`, segment by segment.
+    """Backtracking over the controller's modes, segment by segment.
 
-    The run is cut into segments of :data:`SEGMENT_S`; each runs in one mode, the first
-    by default. When the character gets into trouble (pelvis :data:`TROUBLE_DROP_M`
-    below the reference's, or its up axis tilted below :data:`TROUBLE_UP` and
-    :data:`TROUBLE_TILT_MARGIN_DEG` beyond the reference's, or the head
-    :data:`TROUBLE_HEAD_DROP_M` below the reference's, or the simulation fails), the
+    The run is cut into segments of ``search.segment_s``; each runs in one mode, the first
+    by default. When the character gets into trouble (pelvis ``search.trouble_drop_m``
+    below the reference's, or its up axis tilted below ``search.trouble_up`` and
+    ``search.trouble_tilt_margin_deg`` beyond the reference's, or the head
+    ``search.trouble_head_drop_m`` below the reference's, or the simulation fails), the
     segment is run again from its saved start state in the next mode; the segments after
-    a changed one keep its mode for :data:`STICKY_S`. The search first *sweeps* back: for
+    a changed one keep its mode for ``search.sticky_s``. The search first *sweeps* back: for
     one trouble (until an attempt gets into trouble further on) it changes one segment at a
-    time, each in the next of :data:`SWEEP_MODES` after its mode, then the one before it (up to
-    :data:`MAX_BACKTRACK` back from the trouble's own segment, even when a changed attempt
+    time, each in the next of ``search.sweep_modes`` after its mode, then the one before it
+    (up to ``search.max_backtrack`` back from the trouble's own segment, even when a changed attempt
     gets into trouble earlier), the later ones back on the modes they had before; a sweep
     that finds nothing goes back to the choices before it and tries the combinations in
     every mode, nearest first: when a segment has no modes left, the one before it, and the
@@ -113,31 +80,31 @@ class Search:
     budget re-running the nearest segments' combinations: over seeds 0-20 of issue 10's
     rows the sweep made 12 falls of 231 against 25, 5 against 11 on seeds 11-20, not looked
     at when it was chosen, with 60 % fewer segments run again). When the search has spent
-    :data:`SEARCH_BUDGET` times the reference's physics steps, or has tried every mode
+    ``search.budget`` times the reference's physics steps, or has tried every mode
     within reach, the attempt that got furthest is run again and the run goes on from it
     (a fall is a fall). SAMCON (Liu et al. 2010) searches the same way, with sampled target
     offsets instead of a few discrete modes.
     """
 
     def __init__(self, sim, n_frames: int, fps: float, substeps: int, ref_heights_m,
-                 watched: tuple[int, int], budget: float | None = None,
-                 ref_up_z=None):
+                 watched: tuple[int, int], ref_up_z=None,
+                 config: ControllerConfig = DEFAULT):
         """``ref_heights_m``: the reference's pelvis and head heights, (T,) each;
-        ``watched``: the pelvis body and the head site; ``budget``: in multiples of the
-        reference's physics steps (default :data:`SEARCH_BUDGET`; 0: no search);
-        ``ref_up_z``: the vertical component of the reference's pelvis up axis, (T,)
-        (:func:`up_axis_z`; None: upright throughout)."""
-        given = budget
-        budget = SEARCH_BUDGET if given is None else float(given)
-        if not (math.isfinite(budget) and budget >= 0):
-            raise ValueError(f"the search budget must be a number >= 0, not {given!r}")
+        ``watched``: the pelvis body and the head site; ``ref_up_z``: the vertical
+        component of the reference's pelvis up axis, (T,) (:func:`up_axis_z`; None:
+        upright throughout); ``config``: its ``search`` section and ``modes`` (the budget
+        ``search.budget`` in multiples of the reference's physics steps; 0: no search)."""
+        settings = config.search
+        self.settings = settings
+        self.n_modes = len(config.modes)
         self.sim, self.n_frames = sim, n_frames
-        self.every = segment_frames(fps)
-        self.sticky = int(round(STICKY_S / SEGMENT_S))
+        self.every = segment_frames(fps, settings.segment_s)
+        self.sticky = int(round(settings.sticky_s / settings.segment_s))
         self.ref_pelvis, self.ref_head = ref_heights_m
-        self.up_limit = tilt_limits(np.ones(n_frames) if ref_up_z is None else ref_up_z)
+        self.up_limit = tilt_limits(np.ones(n_frames) if ref_up_z is None else ref_up_z,
+                                    settings)
         self.pelvis_body, self.head_site = watched
-        self.budget_steps = budget * (n_frames - 1) * substeps
+        self.budget_steps = settings.budget * (n_frames - 1) * substeps
         self.choice: dict[int, int] = {}
         self.saved: dict[int, object] = {}
         self.quiet_until = 0
@@ -165,7 +132,7 @@ class Search:
 
     def _mode_of(self, i: int, choice: dict | None = None) -> int:
         """Segment ``i``'s mode: its own choice, else that of the latest segment before
-        it with one, within :data:`STICKY_S`, else the default."""
+        it with one, within ``search.sticky_s``, else the default."""
         choice = self.choice if choice is None else choice
         for j in range(i, max(-1, i - self.sticky - 1), -1):
             if j in choice:
@@ -173,7 +140,7 @@ class Search:
         return 0
 
     def mode(self, t: int) -> int:
-        """The index in :data:`MODES` of frame ``t``'s segment."""
+        """The index in the modes of frame ``t``'s segment."""
         return self._mode_of(self._segment(t))
 
     def modes(self) -> np.ndarray:
@@ -192,8 +159,10 @@ class Search:
     def causes(self, data, t: int) -> tuple:
         """What puts the character in trouble at frame ``t``: any of ``"pelvis low"``,
         ``"head low"``, ``"tilted"`` (empty: not in trouble)."""
-        low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > TROUBLE_DROP_M
-        bent = self.ref_head[t] - data.site_xpos[self.head_site, 2] > TROUBLE_HEAD_DROP_M
+        settings = self.settings
+        low = self.ref_pelvis[t] - data.xpos[self.pelvis_body, 2] > settings.trouble_drop_m
+        bent = (self.ref_head[t] - data.site_xpos[self.head_site, 2]
+                > settings.trouble_head_drop_m)
         tilted = data.xmat[self.pelvis_body, 8] < self.up_limit[t]
         return tuple(name for name, on in (("pelvis low", low), ("head low", bent),
                                            ("tilted", tilted)) if on)
@@ -224,8 +193,8 @@ class Search:
             cause = ("simulation failed",) if failed else self.causes(data, t)
             self._records.append(dict(frame=int(t), time_s=t / self.fps, cause=cause,
                                       retries=0, rerun_s=0.0,
-                                      restarts_by_mode=[0] * len(MODES),
-                                      rerun_s_by_mode=[0.0] * len(MODES), last_mode=None))
+                                      restarts_by_mode=[0] * self.n_modes,
+                                      rerun_s_by_mode=[0.0] * self.n_modes, last_mode=None))
             if not spent:
                 self.trouble = _Trouble(i, i, dict(self.choice))
         back, mode = self._back(t)
@@ -247,20 +216,20 @@ class Search:
 
     def _back(self, t: int) -> tuple[int | None, int | None]:
         """The segment a retry at frame ``t`` goes back to and the mode it runs in next
-        (the next of :data:`SWEEP_MODES` while sweeping, else the next of :data:`MODES`),
+        (the next of ``search.sweep_modes`` while sweeping, else the next mode),
         or ``(None, None)`` (no mode left within reach)."""
         i = self._segment(t)
         back = reach_from = i
-        order = range(1, len(MODES))
+        order = range(1, self.n_modes)
         if self.trouble is not None and self.trouble.sweeping and i <= self.trouble.segment:
             # sweeping: nothing after the last changed, and within reach of the trouble's
             # own segment, not of the earlier one its changes got into trouble at (which
             # chased the sweep up to 10 s back, where the combinations found the way)
             back = min(i, self.trouble.changed)
             reach_from = self.trouble.segment
-            order = SWEEP_MODES
+            order = self.settings.sweep_modes
         mode = None
-        while back >= 0 and reach_from - back <= MAX_BACKTRACK:
+        while back >= 0 and reach_from - back <= self.settings.max_backtrack:
             mode = _next_mode(order, self._mode_of(back))
             if mode is not None:
                 break
@@ -307,20 +276,23 @@ class Search:
         return self.restart
 
 
-def segment_frames(fps: float) -> int:
-    """Frames per :data:`SEGMENT_S` segment at ``fps``: frame ``t``'s steps (from frame
-    ``t - 1`` to ``t``) belong to segment ``(t - 1) // segment_frames(fps)``."""
-    return max(1, int(round(SEGMENT_S * fps)))
+def segment_frames(fps: float, segment_s: float = DEFAULT.search.segment_s) -> int:
+    """Frames per segment of ``segment_s`` (``search.segment_s``) at ``fps``: frame
+    ``t``'s steps (from frame ``t - 1`` to ``t``) belong to segment
+    ``(t - 1) // segment_frames(fps, segment_s)``."""
+    return max(1, int(round(segment_s * fps)))
 
 
-def frame_modes(segment_modes, n_frames: int, fps: float) -> np.ndarray:
+def frame_modes(segment_modes, n_frames: int, fps: float,
+                segment_s: float = DEFAULT.search.segment_s) -> np.ndarray:
     """The mode each frame was run in (the steps that led to it; frame 0: the first
-    segment's), int array (n_frames,), from :meth:`Search.modes` ``(segments,)``."""
+    segment's), int array (n_frames,), from :meth:`Search.modes` ``(segments,)`` (segments
+    of ``segment_s``)."""
     segment_modes = np.asarray(segment_modes, dtype=int)
     if not segment_modes.size:
         return np.zeros(n_frames, dtype=int)
     frames = np.arange(n_frames)
-    index = np.maximum(frames - 1, 0) // segment_frames(fps)
+    index = np.maximum(frames - 1, 0) // segment_frames(fps, segment_s)
     return segment_modes[np.minimum(index, segment_modes.size - 1)]
 
 
@@ -358,30 +330,33 @@ def up_axis_z(quat) -> np.ndarray:
     return (w * w - x * x - y * y + z * z) / (w * w + x * x + y * y + z * z)
 
 
-def tilt_limits(ref_up_z) -> np.ndarray:
+def tilt_limits(ref_up_z, search=DEFAULT.search) -> np.ndarray:
     """The least up-axis component (``xmat[8]``) of the pelvis out of trouble, per frame:
-    :data:`TROUBLE_UP`, or lower where the reference tilts to within
-    :data:`TROUBLE_TILT_MARGIN_DEG` of it (-1: no tilt is trouble).
+    ``search.trouble_up``, or lower where the reference tilts to within
+    ``search.trouble_tilt_margin_deg`` of it (-1: no tilt is trouble).
 
     Parameters
     ----------
     ref_up_z : array_like, shape (T,)
         The reference's pelvis up-axis component (:func:`up_axis_z`).
+    search : controller.config.sections.SearchConfig
 
     Returns
     -------
     ndarray, shape (T,)
     """
     ref_tilt = np.arccos(np.clip(np.asarray(ref_up_z, dtype=float), -1.0, 1.0))
-    beyond = np.cos(np.minimum(np.pi, ref_tilt + math.radians(TROUBLE_TILT_MARGIN_DEG)))
-    return np.minimum(TROUBLE_UP, beyond)
+    margin = math.radians(search.trouble_tilt_margin_deg)
+    beyond = np.cos(np.minimum(np.pi, ref_tilt + margin))
+    return np.minimum(search.trouble_up, beyond)
 
 
-def trouble_rule() -> str:
-    """The search's test for trouble (:meth:`Search.troubled`) in words."""
-    tilt_deg = math.degrees(math.acos(TROUBLE_UP))
-    return (f"in trouble: the pelvis more than {100 * TROUBLE_DROP_M:.0f} cm below the "
-            f"reference's, or the head more than {100 * TROUBLE_HEAD_DROP_M:.0f} cm below "
-            f"the reference's, or the pelvis's up axis more than {tilt_deg:.0f} deg from "
-            f"vertical and {TROUBLE_TILT_MARGIN_DEG:.0f} deg beyond the reference's tilt")
-
+def trouble_rule(search=DEFAULT.search) -> str:
+    """The search's test for trouble (:meth:`Search.troubled`) in words (``search``:
+    :class:`controller.config.sections.SearchConfig`)."""
+    tilt_deg = math.degrees(math.acos(search.trouble_up))
+    return (f"in trouble: the pelvis more than {100 * search.trouble_drop_m:.0f} cm below "
+            f"the reference's, or the head more than {100 * search.trouble_head_drop_m:.0f} "
+            f"cm below the reference's, or the pelvis's up axis more than {tilt_deg:.0f} deg "
+            f"from vertical and {search.trouble_tilt_margin_deg:.0f} deg beyond the "
+            "reference's tilt")

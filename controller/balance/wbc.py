@@ -43,8 +43,6 @@ multiplier test accepts points whose torques differ by newton-metres).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import quadprog
 
@@ -59,46 +57,10 @@ from controller.balance.qp_kernels import (
     watched_constraints,
 )
 from controller.checks.contacts import floor_contacts
+from controller.config import DEFAULT, ControllerConfig
 
-#: Desired contact-point acceleration per unit of its velocity, 1/s (``-k v_c``).
-CONTACT_DAMPING = 20.0
-#: Friction coefficient of the pyramid (below the model's 1.0, so planned forces stick).
-FRICTION = 0.8
-#: A hinge's torque bounds enter the first solve when its applied torque is within this
-#: share of its strength of a bound.
-NEAR_BOUND = 0.2
-#: A solution breaks a bound when it passes it by more than this share of the strength.
-BOUND_TOLERANCE = 1e-9
-#: A torque within this share of the joint's strength of a bound is at it (the warm start's
-#: guess from the applied torques; the balance controller's saturation share).
-AT_BOUND = 1e-6
-#: A guessed active set is wrong where an edge magnitude (body weights) is below minus
-#: this ...
-FORCE_TOLERANCE = 1e-12
-#: ... or a multiplier below minus this times 1 + the largest linear term of the QP.
-MULTIPLIER_TOLERANCE = 1e-14
 _NO_GEOMS = np.zeros((0, 2), dtype=np.int32)
 _NO_POINTS = np.zeros((0, 3))
-
-
-#: The bodies whose hinges are the spine's and the neck's (:attr:`Weights.spine`).
-SPINE_BODIES = ("lowerback", "upperback", "thorax", "lowerneck", "upperneck", "head")
-
-
-@dataclass(frozen=True)
-class Weights:
-    """Least-squares weights (per unit of acceleration, m/s^2 or rad/s^2)."""
-
-    root_rotation: float = 10.0
-    root_yaw: float = 1.0
-    root_height: float = 3.0
-    root_horizontal: float = 10.0
-    joints: float = 1.0
-    spine: float = 3.0
-    contact: float = 100.0
-    force: float = 1e-2
-    torque: float = 0.3
-    flight_root: float = 0.01
 
 
 class WholeBodyID:
@@ -112,10 +74,13 @@ class WholeBodyID:
         The DOF each actuator drives, in actuator order.
     torque_range_nm : ndarray, shape (nu, 2)
         Each actuator's torque range (its ``forcerange``: lower, upper).
-    weights : Weights
+    config : controller.config.ControllerConfig
+        Its ``qp`` (the least-squares weights), ``contact`` (the friction pyramid, the
+        contact damping), ``solver`` (the warm start's tolerances) and ``spine.bodies``.
     """
 
-    def __init__(self, model, joint_dofs, torque_range_nm, weights: Weights | None = None):
+    def __init__(self, model, joint_dofs, torque_range_nm,
+                 config: ControllerConfig = DEFAULT):
         import mujoco
 
         self.model = model
@@ -132,12 +97,17 @@ class WholeBodyID:
         self.low[self.hinge_row] = torque_range[:, 0]
         self.high[self.hinge_row] = torque_range[:, 1]
         self.strength = np.maximum(-self.low, self.high)
-        self.w = weights or Weights()
+        self.w = config.qp
+        self.contact_damping = float(config.contact.damping_per_s)
+        solver = config.solver
+        self.near_bound = solver.near_bound_share
+        self.force_tolerance = solver.force_tolerance_bw
+        self.multiplier_tolerance = solver.multiplier_tolerance
         self.mass = float(np.sum(model.body_mass[1:]))
         self.weight_n = self.mass * float(np.linalg.norm(model.opt.gravity))
         self.M = np.zeros((self.nv, self.nv))
         self._jacp = np.zeros((3, self.nv))
-        mu = FRICTION
+        mu = config.contact.friction
         self.edges = np.array([[mu, 0, 1], [-mu, 0, 1], [0, mu, 1], [0, -mu, 1]], float)
         self.edges /= np.linalg.norm(self.edges, axis=1, keepdims=True)
         # root rotation rows are about the pelvis's own axes; its z axis is the body's up
@@ -147,12 +117,13 @@ class WholeBodyID:
         self.torque_scale = self.w.torque / self.strength
         names = [model.joint(int(model.dof_jntid[d])).name.split("_")[0]
                  for d in range(6, self.nv)]
-        self.spine_rows = np.flatnonzero(np.isin(names, SPINE_BODIES))
+        self.spine_rows = np.flatnonzero(np.isin(names, config.spine.bodies))
         self.joint_w = np.full(self.nv - 6, self.w.joints)
         self._held_w = self.joint_w.copy()
         self.actuator_of_hinge = np.argsort(self.hinge_row)
-        self.tolerance = BOUND_TOLERANCE * self.strength
-        self.at_bound = AT_BOUND * np.where(np.isfinite(self.strength), self.strength, 0.0)
+        self.tolerance = solver.bound_tolerance_share * self.strength
+        self.at_bound = solver.at_bound_share * np.where(np.isfinite(self.strength),
+                                                         self.strength, 0.0)
 
     def floor_contacts(self, data, exclude=(), floor=None):
         """The planned floor contacts: ``(points (m, 3), bodies (m,), index (m,))``, index
@@ -212,7 +183,7 @@ class WholeBodyID:
 
     def joint_weights(self, spine_held: float) -> np.ndarray:
         """Each hinge acceleration row's weight (nv - 6,): ``joints``, the spine's and
-        neck's hinges (:data:`SPINE_BODIES`) times ``1 + (spine - 1) spine_held``. A
+        neck's hinges (the configuration's ``spine.bodies``) times ``1 + (spine - 1) spine_held``. A
         view of the solver's own buffer, valid until the next call."""
         if not spine_held:
             return self.joint_w
@@ -223,7 +194,7 @@ class WholeBodyID:
     def _plan(self, data, qdd_des, contact_damping, exclude, floor, spine_held=0.0):
         """:meth:`solve`'s QP: ``(tau (nu,), x (n,), G (nv, n), g0 (nv,), contacts)``."""
         if contact_damping is None:
-            contact_damping = CONTACT_DAMPING
+            contact_damping = self.contact_damping
         model, nv, w = self.model, self.nv, self.w
         M = self.M
         self._mj_fullM(model, data, M)
@@ -260,8 +231,9 @@ class WholeBodyID:
                                                 self.high, self.at_bound)
                 try:
                     x, ok = solve_active_set(P, q, T, t0, self.low, self.high, nl, fixed,
-                                             upper, lower, self.tolerance, FORCE_TOLERANCE,
-                                             MULTIPLIER_TOLERANCE)
+                                             upper, lower, self.tolerance,
+                                             self.force_tolerance,
+                                             self.multiplier_tolerance)
                 except np.linalg.LinAlgError:  # a guess with no solution: not this one
                     ok = False
                 x = x if ok else None
@@ -282,7 +254,7 @@ class WholeBodyID:
         """
         nj = self.nv - 6
         watched = near_bounds(data.ctrl, self.actuator_of_hinge, self.low, self.high,
-                              self.strength, NEAR_BOUND)
+                              self.strength, self.near_bound)
         while True:
             try:
                 if nl or watched.any():

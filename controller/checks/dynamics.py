@@ -4,7 +4,7 @@ beyond what contact with the floor can supply (SPEC section 6).
 Per frame:
 
 1. **Smoothing**: the trajectory is low-passed (:func:`lowpass_qpos`: zero-phase
-   2nd-order Butterworth, :data:`LOWPASS_HZ` = 12 Hz, on the unwrapped hinge angles, the
+   2nd-order Butterworth, ``residual.lowpass_hz`` = 12 Hz, on the unwrapped hinge angles, the
    root position and the root quaternion's components). Mocap noise, twice
    differentiated, swamps the physics otherwise: on the walk 02_01 the needed force
    averages 1.57 body weights unfiltered (walking needs 1.0 on average) and 1.01 filtered,
@@ -20,12 +20,14 @@ Per frame:
    disabled gives the generalised force that produces the motion; its free-joint part is
    the net external force and torque the whole body needs (at the root, the pelvis).
    Joint-limit and self-contact forces are internal and do not change it.
-4. **Support**: every point where a geom comes within :data:`SUPPORT_DISTANCE_M` of the
+4. **Support**: every point where a geom comes within ``residual.support_distance_m`` of the
    floor (MuJoCo's collision with that margin on the floor) may push with a force inside a
    friction pyramid (4 edges ``n +- mu t1``, ``n +- mu t2``, ``mu`` =
-   :data:`FRICTION`). The non-negative combination of the edge forces that best supplies
-   the needed wrench is found by non-negative least squares (``scipy.optimize.nnls``),
-   torque rows divided by the body's stature so both are in newtons.
+   ``residual.friction``, the simulated floor's 1.0: what a contact could supply at most;
+   the balance controller plans with less, ``contact.friction``). The non-negative
+   combination of the edge forces that best supplies the needed wrench is found by
+   non-negative least squares (``scipy.optimize.nnls``), torque rows divided by the body's
+   stature so both are in newtons.
 5. **Residual**: needed minus supplied — what no contact could give. Reported as force /
    body weight (1.0 = the body's weight) and torque about the root / (body weight x
    stature).
@@ -42,16 +44,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Geoms within this distance of the floor can be pushed by it, metres. Motion-capture
-#: feet on the model hover: in the flat walks of subjects 02, 05, 16 and 35 the lowest
-#: point of a frame is 0.8-2.5 cm above the floor at the median, 1.4-3.7 cm at the 75th
-#: percentile; with 3 cm the walk 02_01 would need 0.38 body weights of residual force on
-#: average (the stance foot out of reach), with 5 cm 0.04, with 8 cm 0.02.
-SUPPORT_DISTANCE_M = 0.05
-#: Friction coefficient of the support pyramid.
-FRICTION = 1.0
-#: Cut-off of the low-pass filter applied before differentiating, Hz.
-LOWPASS_HZ = 12.0
+from controller.config import DEFAULT
+
+# The check's settings are the configuration's ``residual`` section
+# (controller.config.sections.ResidualConfig), where the measurements that chose them are.
+_RESIDUAL = DEFAULT.residual
 
 
 def unwrap_hinges(model, qpos) -> np.ndarray:
@@ -74,7 +71,8 @@ def unwrap_hinges(model, qpos) -> np.ndarray:
     return qpos
 
 
-def lowpass_qpos(model, qpos, fps: float, cutoff_hz: float = LOWPASS_HZ) -> np.ndarray:
+def lowpass_qpos(model, qpos, fps: float,
+                 cutoff_hz: float = _RESIDUAL.lowpass_hz) -> np.ndarray:
     """A trajectory low-passed by a zero-phase 2nd-order Butterworth filter.
 
     Hinges are unwrapped first; the root quaternion's sign is made continuous, its four
@@ -170,7 +168,7 @@ class RootResidual:
     residual_force_n, residual_torque_nm : ndarray, shape (T, 3)
         What remains once the best floor support is subtracted.
     support_points : ndarray of int, shape (T,)
-        Contact points within :data:`SUPPORT_DISTANCE_M` of the floor.
+        Contact points within ``support_distance_m`` of the floor.
     """
 
     fps: float
@@ -218,9 +216,10 @@ class RootResidual:
         }
 
 
-def root_residual(model, qpos, fps: float, support_distance_m: float = SUPPORT_DISTANCE_M,
-                  friction: float = FRICTION,
-                  lowpass_hz: float | None = LOWPASS_HZ) -> RootResidual:
+def root_residual(model, qpos, fps: float,
+                  support_distance_m: float = _RESIDUAL.support_distance_m,
+                  friction: float = _RESIDUAL.friction,
+                  lowpass_hz: float | None = _RESIDUAL.lowpass_hz) -> RootResidual:
     """The external wrench a trajectory needs beyond what floor contact can supply.
 
     Parameters
@@ -233,11 +232,12 @@ def root_residual(model, qpos, fps: float, support_distance_m: float = SUPPORT_D
     fps : float
         Its frame rate (the finite differences' step).
     support_distance_m : float
-        Geoms closer than this to the floor can be pushed.
+        Geoms closer than this to the floor can be pushed, m.
     friction : float
         Friction coefficient of the support pyramid.
     lowpass_hz : float or None
         Cut-off of the smoothing filter (:func:`lowpass_qpos`); None: no smoothing.
+        (The defaults: :class:`controller.config.sections.ResidualConfig`.)
 
     Returns
     -------
@@ -352,7 +352,7 @@ def _needed_and_contacts(model, qpos, qvel, qacc, support_distance_m: float):
 
 
 def raw_inverse_with_contacts(model, qpos, fps: float,
-                              lowpass_hz: float | None = LOWPASS_HZ) -> np.ndarray:
+                              lowpass_hz: float | None = _RESIDUAL.lowpass_hz) -> np.ndarray:
     """The free-joint force of plain ``mj_inverse`` with MuJoCo's soft contacts, for
     comparison with :func:`root_residual` (see the module docstring).
 

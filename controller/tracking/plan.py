@@ -11,15 +11,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.checks.dynamics import half_step_velocities
+from controller.config import DEFAULT, ControllerConfig
 from controller.qpos import wrap_rad
 
-#: The longest physics step used, seconds (the model's own timestep).
-MAX_STEP_S = 0.002
 #: The tracking modes.
 MODES = ("free", "driven")
 
 
-def physics_substeps(fps: float, max_step_s: float = MAX_STEP_S) -> int:
+def physics_substeps(fps: float, max_step_s: float = DEFAULT.step.max_step_s) -> int:
     """Physics steps per frame: the fewest whose step is no longer than ``max_step_s``."""
     return max(1, math.ceil(1.0 / (fps * max_step_s) - 1e-9))
 
@@ -75,7 +74,7 @@ class TrackingPlan:
 
 
 def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
-                  lead: bool = True) -> TrackingPlan:
+                  lead: bool = True, config: ControllerConfig = DEFAULT) -> TrackingPlan:
     """The step-by-step inputs of a tracking simulation (see the module docstring).
 
     Parameters
@@ -88,6 +87,8 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
         ``"free"`` or ``"driven"``.
     lead : bool
         Take servo targets :func:`servo_lead_s` ahead of the reference (else at it).
+    config : controller.config.ControllerConfig
+        Its ``step.max_step_s``: the longest physics step.
 
     Returns
     -------
@@ -105,7 +106,7 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
         raise ValueError("tracking needs at least 2 frames")
     layout = joint_layout(model)
     sim = copy.copy(model)
-    substeps = physics_substeps(fps, min(MAX_STEP_S, float(model.opt.timestep)))
+    substeps = physics_substeps(fps, min(config.step.max_step_s, float(model.opt.timestep)))
     sim.opt.timestep = 1.0 / (fps * substeps)
     free_q = slice(layout.free_qpos, layout.free_qpos + 7)
     free_v = slice(layout.free_dof, layout.free_dof + 6)

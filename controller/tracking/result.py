@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.checks.contacts import SELF_COLLISION_DEPTH_M
+from controller.config import DEFAULT, ControllerConfig
 from controller.falls import rule_text
 
 
@@ -63,6 +64,8 @@ class Tracking:
         MuJoCo's warning counters that are not zero (``"mjWARN_CONTACTFULL"``: n).
     messages : tuple of str
         MuJoCo's warning texts (the first 10 distinct ones).
+    config : controller.config.ControllerConfig
+        The configuration the simulation was made with (its physics step and fall rule).
     """
 
     mode: str
@@ -90,6 +93,7 @@ class Tracking:
     diverged_frame: int | None
     warnings: dict[str, int]
     messages: tuple[str, ...] = ()
+    config: ControllerConfig = DEFAULT
 
     @property
     def n_frames(self) -> int:
@@ -161,7 +165,8 @@ class Tracking:
             "fell": self.fell,
             "fall_frame": self.fall_frame,
             "fall_time_s": None if self.fall_time_s is None else round(self.fall_time_s, 4),
-            "fall_rule": rule_text(self.standing_pelvis_m, self.standing_head_m),
+            "fall_rule": rule_text(self.standing_pelvis_m, self.standing_head_m,
+                                   self.config.falls),
             "diverged_frame": self.diverged_frame,
             "warnings": dict(self.warnings),
             "warning_messages": list(self.messages),

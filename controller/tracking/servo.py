@@ -14,17 +14,17 @@ Two modes:
 Servo targets are the reference's hinge angles, unwrapped along time, interpolated
 linearly to every physics step and wrapped back (MuJoCo clamps each to its joint's range:
 a target beyond the ASF limit cannot be reached). The physics step is the largest step
-no longer than the model's (2 ms) that divides the frame period (120 fps: 5 steps of
-1.667 ms per frame), so every frame falls on a step.
+no longer than the model's (2 ms, ``step.max_step_s``) that divides the frame period
+(120 fps: 5 steps of 1.667 ms per frame), so every frame falls on a step.
 
 Reported per frame (the state at the frame's step): the joint tracking error (RMS over
 the hinges of the wrapped difference from the reference, degrees), the joint-limit
 constraint rows active (``efc_type == mjCNSTR_LIMIT_JOINT``), the self-contacts, the
 pelvis and head heights and the largest servo torque; and over the run the share of
 steps with a limit active, the fall and MuJoCo's warnings. The character has **fallen**
-when its pelvis or head is below :data:`FALL_FRACTION` of its standing height while the
-reference's is not, and more than :data:`controller.falls.FALL_MARGIN` of it below the
-reference's (a reference that crouches or lies down is not a fall). A simulation
+when its pelvis or head is below half its standing height (``falls.fraction``) while the
+reference's is not, and more than a tenth of it (``falls.margin``) below the reference's
+(a reference that crouches or lies down is not a fall: :mod:`controller.falls`). A simulation
 whose state becomes non-finite, or on which MuJoCo warns of a bad qpos/qvel/qacc
 (it then resets the state itself), is stopped: ``diverged_frame`` says where, and
 later frames are NaN.
@@ -36,11 +36,11 @@ import time
 
 import numpy as np
 
-from controller.falls import FALL_FRACTION, fall_frame, reference_heights
+from controller.config import DEFAULT, ControllerConfig
+from controller.falls import fall_frame, reference_heights
 from controller.mjwarnings import collected_warnings, warning_counts
 from controller.qpos import wrap_rad
 from controller.tracking.plan import (
-    MAX_STEP_S,
     MODES,
     TrackingPlan,
     floor_depth,
@@ -50,11 +50,12 @@ from controller.tracking.plan import (
 )
 from controller.tracking.result import Tracking
 
-__all__ = ["FALL_FRACTION", "MAX_STEP_S", "MODES", "Tracking", "TrackingPlan", "floor_depth",
-           "physics_substeps", "plan_tracking", "servo_lead_s", "track", "track_qpos"]
+__all__ = ["MODES", "Tracking", "TrackingPlan", "floor_depth", "physics_substeps",
+           "plan_tracking", "servo_lead_s", "track", "track_qpos"]
 
 
-def track(model, motion, mode: str = "free", lead: bool = True) -> Tracking:
+def track(model, motion, mode: str = "free", lead: bool = True,
+          config: ControllerConfig = DEFAULT) -> Tracking:
     """Simulate the humanoid with its servos following a motion.
 
     Parameters
@@ -67,6 +68,8 @@ def track(model, motion, mode: str = "free", lead: bool = True) -> Tracking:
         ``"free"`` (root free on the floor) or ``"driven"`` (root along the reference).
     lead : bool
         Servo targets ahead of the reference by ``kv/kp`` (:func:`servo_lead_s`).
+    config : controller.config.ControllerConfig
+        Its ``step`` (the longest physics step) and ``falls`` (the fall rule).
 
     Returns
     -------
@@ -76,11 +79,11 @@ def track(model, motion, mode: str = "free", lead: bool = True) -> Tracking:
 
     if motion.n_frames < 2:
         raise ValueError("tracking needs a motion of at least 2 frames")
-    return track_qpos(model, to_qpos(model, motion), motion.fps, mode, lead)
+    return track_qpos(model, to_qpos(model, motion), motion.fps, mode, lead, config)
 
 
 def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
-               lead: bool = True) -> Tracking:
+               lead: bool = True, config: ControllerConfig = DEFAULT) -> Tracking:
     """:func:`track` on a reference given as ``qpos``, shape (T, nq), at ``fps``."""
     import mujoco
 
@@ -88,7 +91,7 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
     from controller.mjwarnings import fatal
     from controller.qpos import joint_layout
 
-    plan = plan_tracking(model, reference_qpos, fps, mode, lead)
+    plan = plan_tracking(model, reference_qpos, fps, mode, lead, config)
     sim, ref, substeps = plan.model, plan.reference_qpos, plan.substeps
     ctrl, root_q, root_v = plan.ctrl, plan.root_qpos, plan.root_qvel
     n_frames = ref.shape[0]
@@ -139,9 +142,10 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
         head_height_m=record.head, reference_pelvis_height_m=ref_pelvis,
         reference_head_height_m=ref_head, standing_pelvis_m=figures.pelvis_height_m,
         standing_head_m=figures.head_height_m,
-        fall_frame=fall_frame(record.pelvis, record.head, ref_pelvis, ref_head, figures),
+        fall_frame=fall_frame(record.pelvis, record.head, ref_pelvis, ref_head, figures,
+                              config.falls),
         diverged_frame=diverged, warnings=warning_counts(data),
-        messages=tuple(dict.fromkeys(messages))[:10],
+        messages=tuple(dict.fromkeys(messages))[:10], config=config,
     )
 
 

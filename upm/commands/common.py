@@ -41,6 +41,41 @@ def check_strength(value: float) -> float:
     return float(value)
 
 
+def add_config_argument(parser, used: str) -> None:
+    """``--config FILE.toml``: the controller's tuning constants (:func:`controller_config`);
+    ``used``: what they set in this command, for the help."""
+    parser.add_argument(
+        "--config", metavar="FILE.toml", default=None,
+        help=f"tuning constants of {used}, from a TOML file: the keys it names change, "
+             "the others keep their defaults, and the report records them all (default: "
+             "no file, the built-in constants)")
+
+
+def controller_config(args, unused=()):
+    """The :class:`controller.config.ControllerConfig` of ``--config`` (the defaults
+    without it), its search budget replaced by ``--search-budget`` where given.
+
+    Raises
+    ------
+    controller.config.ConfigError
+        A :class:`upm.core.errors.UsageError`: one line naming the file and the key (an
+        unknown key, a value of the wrong type, a file that is not TOML), or a section of
+        ``unused`` (names of sections this command does not use) changed by the file.
+    """
+    from controller.config import DEFAULT, ConfigError, load_config
+
+    if args.config is None:
+        config = DEFAULT
+    else:
+        config = load_config(args.config)
+        changed = [name for name in unused if getattr(config, name) != getattr(DEFAULT, name)]
+        if changed:
+            raise ConfigError(f"{args.config}: [{changed[0]}] is not used by upm "
+                             f"{args.command} (remove it: this command's runs keep its "
+                             "defaults)")
+    return config.with_search_budget(getattr(args, "search_budget", None))
+
+
 def print_json(obj) -> None:
     """Print ``obj`` as indented JSON on stdout."""
     json.dump(obj, sys.stdout, indent=2)

@@ -54,7 +54,9 @@ the pairs get it. It runs on a local process pool, or on Ray (--executor ray: a 
 Ray instance, or an existing cluster with --address ray://HEAD:10001 or HEAD:6379:
 docs/guides/ray-cluster.md). Ctrl-C or SIGTERM stops it at any time. Finished runs are kept in
 OUT/physics-partial.jsonl as they come: if runs fail or the command is stopped, the
-same command completes only what is missing.
+same command completes only what is missing. --config FILE.toml changes the balance
+controller's tuning constants for the free-root test (recorded in results.json and in the
+checkpoint: a run with another configuration starts afresh).
 
 Examples:
   upm eval --out upm-eval
@@ -78,7 +80,7 @@ DEFAULT_OUT = "upm-eval"
 
 
 def configure(parser) -> None:
-    from upm.commands.common import add_data_argument
+    from upm.commands.common import add_config_argument, add_data_argument
 
     add_data_argument(parser)
     parser.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
@@ -111,6 +113,8 @@ def configure(parser) -> None:
     parser.add_argument("--physics-pairs", type=int, metavar="N", default=None,
                         help="pairs that get the free-root test: the study's first N "
                              "(default: all of --pairs)")
+    add_config_argument(parser, "the balance controller of the --physics test (the "
+                                "kinematic scores keep their own checks)")
     parser.add_argument("--executor", choices=("local", "ray"), default="local",
                         help="where the work runs: a local process pool (default) or Ray")
     parser.add_argument("--address", metavar="ADDR", default=None,
@@ -147,6 +151,7 @@ def run(args) -> int:
     from eval.console import headline_text, legend
     from eval.outputs import figure_window, write_outputs
     from eval.study import STUDY_METHODS, StudyConfig, run_study
+    from upm.commands.common import controller_config
     from upm.core.errors import UsageError
     from upm.motion.catalog import Catalog
     from upm.transitions import get_method
@@ -177,6 +182,10 @@ def run(args) -> int:
     if not 1 <= physics_pairs <= pairs:
         raise UsageError(f"--physics-pairs must be between 1 and --pairs ({pairs}), "
                          f"not {physics_pairs}")
+    if args.config is not None and not args.physics:
+        raise UsageError("--config sets the free-root test's controller: it goes with "
+                         "--physics")
+    physics_config = controller_config(args, unused=("residual", "window_runs"))
     from eval.executor import check_executor
 
     check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
@@ -200,7 +209,8 @@ def run(args) -> int:
             print(f"upm eval: free-root test on {physics_pairs} pairs x {len(methods)} "
                   f"methods + real windows ({args.executor})", file=sys.stderr)
             physics = run_physics(result, physics_pairs, out, executor=args.executor,
-                                  address=args.address, workers=args.workers)
+                                  address=args.address, workers=args.workers,
+                                  controller_config=physics_config)
     report = write_outputs(result, out, figures=args.figures, physics=physics)
     if physics is not None:
         physics.checkpoint.remove()

@@ -20,6 +20,8 @@ and when. Written to --out: robustness.json (settings, software versions,
 per row, every run), robustness.md (the table) and robustness.png (the falls on each row's
 timeline). Finished runs are kept in robustness-partial.jsonl as they
 come: the same command, stopped or failed, completes only what is missing.
+--config FILE.toml changes the balance controller's tuning constants (recorded in
+robustness.json's settings; the checkpoint of another configuration is not resumed).
 
 Examples:
   upm robustness --out upm-robustness
@@ -36,8 +38,13 @@ DEFAULT_OUT = "upm-robustness"
 
 
 def configure(parser) -> None:
+    from controller.config import DEFAULT
     from eval.robustness import OFFSET_DEG, OFFSET_SEEDS
-    from upm.commands.common import add_data_argument, add_strength_argument
+    from upm.commands.common import (
+        add_config_argument,
+        add_data_argument,
+        add_strength_argument,
+    )
 
     add_data_argument(parser)
     parser.add_argument("--rows", nargs="+", metavar="ROW", default=None,
@@ -53,12 +60,11 @@ def configure(parser) -> None:
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="UPM for the rows joined by upm or feasible (default: trained on "
                              "the train split, cached)")
-    from controller.balance.search import SEARCH_BUDGET
-
     parser.add_argument("--search-budget", metavar="X", type=float, default=None,
                         help="the balance controller's search budget, in multiples of the "
                              "run's own physics steps (default: the controller's, "
-                             f"{SEARCH_BUDGET:g})")
+                             f"{DEFAULT.search.budget:g}; over --config's)")
+    add_config_argument(parser, "the balance controller")
     from upm.commands.transition import add_cut_argument
 
     add_cut_argument(parser)
@@ -85,7 +91,7 @@ def run(args) -> int:
 
     from eval.robustness import CHECKPOINT_NAME, DEFAULT_ROWS, Settings, parse_rows, run_robustness
     from eval.robustness_report import plot, summary, table_markdown
-    from upm.commands.common import check_strength
+    from upm.commands.common import check_strength, controller_config
     from upm.core.errors import UsageError
     from upm.core.fileio import atomic_path
     from upm.motion.catalog import Catalog
@@ -107,6 +113,7 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
+    config = controller_config(args, unused=("residual", "window_runs"))
     from eval.executor import check_executor
 
     check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
@@ -116,7 +123,7 @@ def run(args) -> int:
         if catalog.load_ref(piece).n_frames < 2:  # a one-line error for a bad clip or range
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
     settings = Settings(data_dir=str(catalog.root.resolve()), map_path=args.map,
-                        offset_deg=float(args.offset_deg), search_budget=args.search_budget,
+                        offset_deg=float(args.offset_deg), controller_config=config,
                         cut=args.cut, strength=strength)
     print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
           f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)

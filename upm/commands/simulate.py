@@ -35,6 +35,10 @@ outcome holds.
 --strength K multiplies every joint's torque limit by K (default 1: the strength tables'
 strong adult): would a stronger body carry out what this one cannot?
 
+--config FILE.toml changes the tuning constants of the controller, the servo tracking and
+the residual check (the keys the file names; the report records the whole configuration
+under settings.controller_config, so that the run can be made again from the report).
+
 Example:
   upm simulate --map upm.npz --sequence 02_01@0:200 02_03@20:150 --report r.json --video r.mp4
 """
@@ -49,7 +53,11 @@ RENDER_CHOICES = ("driven", "free", "reference")
 
 
 def configure(parser) -> None:
-    from upm.commands.common import add_data_argument, add_strength_argument
+    from upm.commands.common import (
+        add_config_argument,
+        add_data_argument,
+        add_strength_argument,
+    )
     from upm.commands.transition import add_cut_argument, add_method_arguments
 
     add_data_argument(parser)
@@ -71,7 +79,9 @@ def configure(parser) -> None:
                         help="the balance controller's backtracking search may simulate "
                              "up to X times the sequence's physics steps in all (default "
                              f"{_default_budget():g}; 0: no search; more carries harder "
-                             "sequences through at more cost)")
+                             "sequences through at more cost; over --config's)")
+    add_config_argument(parser, "the balance controller, the servo tracking and the "
+                                "residual check")
     add_strength_argument(parser)
     parser.add_argument("--offset-deg", metavar="SIGMA", type=float, default=0.0,
                         help="move every joint angle of the sequence by its own constant "
@@ -118,9 +128,9 @@ def _default_processes() -> int:
 
 
 def _default_budget() -> float:
-    from controller.balance.search import SEARCH_BUDGET
+    from controller.config import DEFAULT
 
-    return SEARCH_BUDGET
+    return DEFAULT.search.budget
 
 
 def run(args) -> int:
@@ -138,7 +148,7 @@ def run(args) -> int:
     )
     from controller.report import write_report
     from humanoid_xml import catalog_model_path, load_model
-    from upm.commands.common import check_strength
+    from upm.commands.common import check_strength, controller_config
     from upm.commands.transition import sequence_from_args
     from upm.core.errors import UsageError
 
@@ -175,6 +185,7 @@ def run(args) -> int:
     if args.viewer and not has_display():
         raise UsageError("--viewer needs a display (DISPLAY is not set); use --video V.mp4 "
                          "to render offscreen instead")
+    config = controller_config(args)
     catalog, refs, sequence = sequence_from_args(args, args.sequence)
     motion = sequence.motion
     if args.offset_deg > 0:
@@ -196,7 +207,7 @@ def run(args) -> int:
         pieces=[(str(ref), part) for ref, part in zip(refs, sequence.pieces, strict=True)],
         tracking_modes=tuple(args.modes), window_free=args.window_runs,
         model_path=model_path, controller=args.controller, progress=True,
-        search_budget=args.search_budget, processes=args.processes, strength=strength)
+        processes=args.processes, strength=strength, config=config)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
                           "cut": args.cut,
