@@ -34,3 +34,16 @@ def test_real_clips_leave_their_limits(all_motions):
     shares = {name: outside_share(m)[0] for name, m in all_motions.items()}
     assert all(0.02 < s < 0.17 for s in shares.values()), shares
     assert shares["05_06"] > shares["16_15"]  # dance leaves them more than a walk
+
+
+
+def test_tolerance_applies_at_both_ends():
+    """A value a hair outside either end is inside (a hair below the lower end used to
+    wrap to about 360 degrees: lclavicle.rz = -3.3e-14 against 0); clearly outside is not."""
+    limits = np.array([[0.0, 20.0], [-160.0, 20.0]])
+    for hair in (1e-14, 3.3e-14, 1e-9, 5e-7):
+        below = np.array([[-hair, -160.0 - hair]])
+        above = np.array([[20.0 + hair, 20.0 + hair]])
+        assert limit_excess_deg(np.vstack([below, above]), limits).max() == 0.0
+    outside = limit_excess_deg(np.array([[-0.5, -160.5], [20.5, 20.5]]), limits)
+    np.testing.assert_allclose(outside, 0.5, atol=1e-9)

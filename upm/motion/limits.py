@@ -13,7 +13,7 @@ def limit_excess_deg(angle_deg, limits_deg, tolerance_deg: float = LIMIT_TOLERAN
 
     The angle is compared modulo 360 (CMU angles are sometimes unwrapped past 360): the
     excess is the shorter way from the angle to the nearer end of its allowed arc, 0
-    inside it (within ``tolerance_deg``).
+    inside it (within ``tolerance_deg`` of either end).
 
     Parameters
     ----------
@@ -28,7 +28,10 @@ def limit_excess_deg(angle_deg, limits_deg, tolerance_deg: float = LIMIT_TOLERAN
     """
     limits = np.asarray(limits_deg, dtype=float)
     lo, hi = limits[:, 0], limits[:, 1]
-    above_lo = np.mod(np.asarray(angle_deg, dtype=float) - lo, 360.0)
+    # measured from a tolerance below the lower end, so that a value a hair below it
+    # (-3e-14 against 0) is inside instead of wrapping to nearly 360
+    above_lo = np.mod(np.asarray(angle_deg, dtype=float) - lo + tolerance_deg,
+                      360.0) - tolerance_deg
     span = hi - lo
     outside = above_lo > span + tolerance_deg
     excess = np.minimum(above_lo - span, 360.0 - above_lo)
