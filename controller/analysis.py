@@ -22,14 +22,16 @@ def settings(tracking_modes=(), controller: str = "balance", processes: int = 1,
     :meth:`ControllerConfig.from_dict` reads back). ``strength``: the multiple of the
     strength tables' torque limits the model was loaded with
     (:func:`humanoid_xml.models.load_model`)."""
-    from controller.checks.contacts import SELF_COLLISION_DEPTH_M
-    from controller.checks.validity import FLOOR_TOLERANCE_M
+    from controller.checks import tissue
     from upm.motion.limits import LIMIT_TOLERANCE_DEG
 
     out = {
         "limit_tolerance_deg": LIMIT_TOLERANCE_DEG,
-        "self_collision_depth_mm": 1000 * SELF_COLLISION_DEPTH_M,
-        "floor_tolerance_mm": 1000 * FLOOR_TOLERANCE_M,
+        "limits": "human",
+        "self_touch_mm": 1000 * tissue.TOUCH_M,
+        "self_allowance_mm": {k: round(1000 * v, 1) for k, v in tissue.SELF_ALLOWANCE_M.items()},
+        "floor_allowance_mm": {k: round(1000 * v, 1)
+                               for k, v in tissue.FLOOR_ALLOWANCE_M.items()},
         "strength": strength,
         "dynamics": {
             "lowpass_hz": config.residual.lowpass_hz,
@@ -147,7 +149,7 @@ def window_free_runs(model, motion, windows, controller: str = "balance",
     return out
 
 
-def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
+def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None, limits=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
             model_path=None, controller: str = "balance", progress: bool = False,
             processes: int = 1, strength: float = 1.0, config: ControllerConfig = DEFAULT):
@@ -201,7 +203,7 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     from controller.tracking.servo import track
 
     windows = tuple(windows)
-    validity = check_motion(model, motion, windows)
+    validity = check_motion(model, motion, windows, limits=limits)
     check = config.residual
     residual = (root_residual(model, to_qpos(model, motion), motion.fps,
                               check.support_distance_m, check.friction, check.lowpass_hz)

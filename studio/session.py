@@ -146,29 +146,27 @@ def offending_bodies(model, validity) -> np.ndarray:
     Returns
     -------
     (T, nbody) bool array
-        A body is flagged when a DOF of its bone is beyond its limit, when it is in a
-        self-contact deeper than :data:`controller.checks.contacts.SELF_COLLISION_DEPTH_M`, or
-        when it is more than :data:`controller.checks.validity.FLOOR_TOLERANCE_M` below the
-        floor: the frame-level flags of :attr:`Validity.valid`, per body.
+        A body is flagged when a rule of its joint is broken (the range model's: the
+        human range by default), when it is in a self-contact deeper than its pair's
+        soft-tissue allowance, or when it is deeper below the floor than its class
+        allows (:mod:`controller.checks.tissue`): the frame-level flags of
+        :attr:`Validity.valid`, per body.
     """
     import mujoco
-
-    from controller.checks.contacts import SELF_COLLISION_DEPTH_M
-    from controller.checks.validity import FLOOR_TOLERANCE_M
-    from upm.motion.skeleton import POSTURE_DOF_NAMES
 
     n = validity.n_frames
     out = np.zeros((n, model.nbody), dtype=bool)
     dof_body = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY,
-                                           name.split(".")[0]) for name in POSTURE_DOF_NAMES])
+                                           name.split(".")[0]) for name in validity.rule_names])
     frames, dofs = np.nonzero(validity.limit_excess_deg > 0)
     known = dof_body[dofs] >= 0
     out[frames[known], dof_body[dofs[known]]] = True
     c = validity.contacts
-    self_deep = ~c.is_floor & (c.depth_m > SELF_COLLISION_DEPTH_M)
+    beyond = validity.contact_excess_m > 0
+    self_deep = ~c.is_floor & beyond
     out[c.frame[self_deep], c.body1[self_deep]] = True
     out[c.frame[self_deep], c.body2[self_deep]] = True
-    floor_deep = c.is_floor & (c.depth_m > FLOOR_TOLERANCE_M)
+    floor_deep = c.is_floor & beyond
     out[c.frame[floor_deep], c.body2[floor_deep]] = True
     return out
 

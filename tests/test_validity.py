@@ -59,7 +59,7 @@ def test_posture_20_degrees_past_a_limit_is_flagged_by_that_dof(model02, skeleto
     posture = motion.posture_deg.copy()
     posture[1, dof] = hi + 20.0
     posture[2, dof] = lo - 20.0 + 360.0  # the same excess, written unwrapped
-    validity = check_motion(model02, motion.replace(posture_deg=posture))
+    validity = check_motion(model02, motion.replace(posture_deg=posture), limits="asf")
     assert list(validity.limit_violation) == [False, True, True]
     for frame in (1, 2):
         flagged = validity.violating_dofs(frame)
@@ -130,7 +130,8 @@ def test_window_frames_are_marked_and_judged_beyond_their_ends(model02, skeleton
     lo = skeleton02.limits_deg[dof, 0]
     posture = motion.posture_deg.copy()
     posture[:, dof] = [0, lo - 10, lo - 12, lo - 9, lo - 10, 0]  # ends already 10 beyond
-    validity = check_motion(model02, motion.replace(posture_deg=posture), [slice(2, 4)])
+    validity = check_motion(model02, motion.replace(posture_deg=posture), [slice(2, 4)],
+                            limits="asf")
     assert list(validity.in_window) == [-1, -1, 0, 0, -1, -1]
     np.testing.assert_allclose(validity.added_excess_deg[:, dof], [0, 0, 2, 0, 0, 0])
     assert list(validity.valid_beyond_ends) == [True, False, False, True, False, True]
@@ -189,4 +190,4 @@ def test_summaries_agree_with_frame_records(model02, walk):
     for r in records:
         assert r["valid"] == (not r["limit_violation"] and not r["self_collision"]
                               and not r["floor_penetration"])
-        assert set(r["limit_dofs"]) <= set(POSTURE_DOF_NAMES)
+        assert set(r["limit_dofs"]) <= set(validity.rule_names)

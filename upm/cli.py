@@ -31,6 +31,7 @@ COMMANDS: dict[str, str] = {
     "convert": "upm.commands.convert",
     "model": "upm.commands.model",
     "check": "upm.commands.check",
+    "calibrate": "upm.commands.calibrate",
     "simulate": "upm.commands.simulate",
     "eval": "upm.commands.eval",
     "robustness": "upm.commands.robustness",

@@ -3,9 +3,9 @@
 :mod:`upm.transitions.feasible` must not import MuJoCo; it calls a duck-typed checker.
 This module is that checker, :class:`HumanoidChecker` (self-collision of postures on a
 skeleton's humanoid, the study's definition: a contact between two bodies the model does
-not exclude, deeper than :data:`controller.checks.contacts.SELF_COLLISION_DEPTH_M`; and,
-given the root, floor penetration deeper than
-:data:`controller.checks.validity.FLOOR_TOLERANCE_M`). Importing it (the ``controller``
+not exclude, deeper than the soft tissue of that pair allows; and, given the root, a geom
+deeper below the floor than its class allows: :mod:`controller.checks.tissue`).
+Importing it (the ``controller``
 package does) registers the checker with
 :func:`upm.transitions.feasible_keys.register_kinematic_checker`.
 """
@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.checks.contacts import SELF_COLLISION_DEPTH_M
-from controller.checks.validity import FLOOR_TOLERANCE_M
+from controller.checks.tissue import allowed_depth_m
 from upm.transitions.feasible_keys import register_kinematic_checker
 
 #: Root height while checking postures, metres: far above the floor, so that only
@@ -53,6 +52,10 @@ class HumanoidChecker:
         names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_BODY, b)
                  for b in range(self.model.nbody)]
         self._pair_names = np.array([[f"{a}-{b}" for b in names] for a in names], dtype=object)
+        ids = np.arange(len(names))
+        first, second = np.meshgrid(ids, ids, indexing="ij")
+        self._allowed_m = allowed_depth_m(names, first.ravel(), second.ravel()).reshape(
+            len(names), len(names))
         self._geom_body = np.asarray(self.model.geom_bodyid)
 
     def self_collision_pairs(self, postures_deg) -> list[frozenset]:
@@ -87,7 +90,7 @@ class HumanoidChecker:
             Per posture, the body pairs in self-collision (as :meth:`self_collision_pairs`);
             with ``names=False``, whether there is one.
         floor : ndarray of bool, shape (N,)
-            A geom deeper than ``FLOOR_TOLERANCE_M`` below the floor (the study's rule).
+            A geom deeper below the floor than its class allows (the study's rule).
         """
         import mujoco
 
@@ -111,8 +114,9 @@ class HumanoidChecker:
             depth = -data.contact.dist[:n]
             bodies = np.sort(self._geom_body[data.contact.geom[:n]], axis=1)
             on_floor = bodies[:, 0] == 0
-            floor[t] = bool(np.any(depth[on_floor] > FLOOR_TOLERANCE_M))
-            deep = ~on_floor & (depth > SELF_COLLISION_DEPTH_M)
+            beyond = depth > self._allowed_m[bodies[:, 0], bodies[:, 1]]
+            floor[t] = bool(np.any(beyond & on_floor))
+            deep = ~on_floor & beyond
             if names:
                 pairs.append(frozenset(self._pair_names[b1, b2] for b1, b2 in bodies[deep]))
             else:

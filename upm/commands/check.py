@@ -1,8 +1,12 @@
 """Check a motion for physical validity on the MuJoCo humanoid of its skeleton.
 
-Per frame: joint-limit violation (degrees beyond each DOF's ASF range), self-collision
-(body pairs deeper than 1 mm), floor penetration (a geom more than 1 cm below the floor);
-a frame is valid when it has none of the three. Per motion, unless --no-dynamics: the
+Per frame: beyond the human range of motion (degrees beyond each anatomical rule; the
+hips and shoulders coupled; --limits asf judges by the ASF's declared boxes instead, and
+the degrees beyond those are always reported as 'asf%'), self-interpenetration (a
+contact deeper than the soft tissue of that body pair allows: touching is allowed), and
+through the floor (deeper than the body class allows: a heel pad may roll on the floor);
+a frame is valid when it has none of the three. 'upm calibrate' measures how often real
+frames pass and impossible ones fail. Per motion, unless --no-dynamics: the
 external force and torque the motion needs beyond what floor contact can supply (inverse
 dynamics, in body weights and body weight x stature).
 
@@ -19,7 +23,7 @@ each and the totals: real motion capture is the calibration for every validity f
 
 from __future__ import annotations
 
-from upm.commands.common import add_data_argument, format_table, print_json
+from upm.commands.common import add_data_argument, add_limits_argument, format_table, print_json
 
 HELP = "physical validity of a motion: joint limits, self-collision, floor, dynamics"
 
@@ -34,6 +38,7 @@ def configure(parser) -> None:
     parser.add_argument("--split", choices=["train", "test", "all"], default=None,
                         help="check every clip of a split of clips.csv (calibration)")
     add_data_argument(parser)
+    add_limits_argument(parser)
     parser.add_argument("--no-dynamics", action="store_true",
                         help="skip the inverse-dynamics residual")
     parser.add_argument("--json", action="store_true",
@@ -99,7 +104,9 @@ def run(args) -> int:
     from controller.report import write_report
     from humanoid_xml import load_model
     from upm.core.progress import progress
+    from upm.motion.range_models import range_model
 
+    limits = range_model(args.limits)
     items = _motions(args)
     models = {}
     reports = []
@@ -108,7 +115,7 @@ def run(args) -> int:
         if path not in models:
             models[path] = load_model(path)
         report, _ = analyse(models[path], motion, dynamics=not args.no_dynamics,
-                            model_path=path)
+                            model_path=path, limits=limits)
         if info is not None:
             report["motion"]["split"] = info.split
         reports.append(report)
@@ -141,7 +148,8 @@ def _calibration(reports) -> dict:
         row = {"clip": r["motion"]["name"], "split": r["motion"].get("split", ""),
                **{key: k[key] for key in (
                    "frames", "valid_pct", "limit_violation_pct", "limit_excess_mean_deg",
-                   "limit_excess_peak_deg", "self_collision_pct", "floor_penetration_pct")}}
+                   "limit_excess_peak_deg", "self_collision_pct", "floor_penetration_pct",
+                   "beyond_asf_pct")}}
         if "dynamics" in r["totals"]:
             row["residual_force_bw_mean"] = r["totals"]["dynamics"]["residual_force_bw_mean"]
         rows.append(row)
@@ -149,7 +157,8 @@ def _calibration(reports) -> dict:
     def totals(subset) -> dict:
         frames = sum(r["totals"]["kinematic"]["frames"] for r in subset)
         out = {"clips": len(subset), "frames": frames}
-        for key in ("valid", "limit_violation", "self_collision", "floor_penetration"):
+        for key in ("valid", "limit_violation", "self_collision", "floor_penetration",
+                    "beyond_asf"):
             count = sum(r["totals"]["kinematic"][f"{key}_frames"] for r in subset)
             out[f"{key}_pct"] = round(100 * count / max(frames, 1), 2)
         out["limit_excess_mean_deg"] = round(sum(
@@ -195,7 +204,8 @@ def _print_table(calibration: dict) -> None:
                ("valid_pct", "valid%", ">.1f"), ("limit_violation_pct", "limit%", ">.1f"),
                ("limit_excess_mean_deg", "excess_mean", ">.2f"),
                ("limit_excess_peak_deg", "excess_peak", ">.1f"),
-               ("self_collision_pct", "self%", ">.1f"), ("floor_penetration_pct", "floor%", ">.1f")]
+               ("self_collision_pct", "self%", ">.1f"), ("floor_penetration_pct", "floor%", ">.1f"),
+               ("beyond_asf_pct", "asf%", ">.1f")]
     rows = calibration["clips"]
     if rows and "residual_force_bw_mean" in rows[0]:
         columns.append(("residual_force_bw_mean", "resid_bw", ">.3f"))
@@ -205,7 +215,8 @@ def _print_table(calibration: dict) -> None:
         line = (f"{name}: {t['clips']} clips, {t['frames']} frames: valid {t['valid_pct']:.1f} %, "
                 f"limit violation {t['limit_violation_pct']:.1f} % (mean excess "
                 f"{t['limit_excess_mean_deg']:.2f} deg), self-collision "
-                f"{t['self_collision_pct']:.1f} %, floor {t['floor_penetration_pct']:.1f} %")
+                f"{t['self_collision_pct']:.1f} %, floor {t['floor_penetration_pct']:.1f} %; "
+                f"beyond the ASF's declared limits {t['beyond_asf_pct']:.1f} % (not judged)")
         if "residual_force_bw_mean" in t:
             line += f", residual force {t['residual_force_bw_mean']:.3f} bw"
         print(line)
@@ -217,11 +228,14 @@ def _print_one(report: dict) -> None:
     print(f"{m['name']}: {m['frames']} frames at {m['fps']:g} fps on a {m['mass_kg']:.1f} kg, "
           f"{m['stature_m']:.2f} m humanoid ({m['skeleton']})")
     print(f"  valid frames          {k['valid_frames']:6d} ({k['valid_pct']:.1f} %)")
-    print(f"  joint-limit violation {k['limit_violation_frames']:6d} "
+    print(f"  beyond the range      {k['limit_violation_frames']:6d} "
           f"({k['limit_violation_pct']:.1f} %), excess per frame mean "
           f"{k['limit_excess_mean_deg']:.2f} deg, peak {k['limit_excess_peak_deg']:.2f} deg")
-    print(f"  self-collision        {k['self_collision_frames']:6d} ({k['self_collision_pct']:.1f} "
-          f"%), deepest {k['self_depth_peak_mm']:.1f} mm")
+    print(f"  self-interpenetration {k['self_collision_frames']:6d} ({k['self_collision_pct']:.1f} "
+          f"%), deepest {k['self_depth_peak_mm']:.1f} mm, {k['self_excess_peak_mm']:.1f} mm "
+          f"beyond its allowance; touching only {k['self_touch_frames']} frames")
+    print(f"  beyond the ASF limits {k['beyond_asf_frames']:6d} ({k['beyond_asf_pct']:.1f} %), "
+          f"reported, not judged (verdict: --limits {k['limits']})")
     print(f"  floor penetration     {k['floor_penetration_frames']:6d} "
           f"({k['floor_penetration_pct']:.1f} %), deepest {k['floor_depth_peak_mm']:.1f} mm")
     if "dynamics" in report["totals"]:

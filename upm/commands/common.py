@@ -20,6 +20,15 @@ def add_data_argument(parser) -> None:
 MAX_STRENGTH = 10.0
 
 
+def add_limits_argument(parser) -> None:
+    """``--limits human|asf|FILE``: the range-of-motion model of the verdict."""
+    parser.add_argument("--limits", default="human", metavar="human|asf|FILE",
+                        help="the range of motion judged: 'human' (default: anatomical "
+                             "ranges from the literature, hips and shoulders coupled), "
+                             "'asf' (the ASF's declared boxes), or a JSON file "
+                             "{\"model\": \"human\", \"ranges\": {rule: [low, high]}}")
+
+
 def add_strength_argument(parser) -> None:
     """``--strength K``: every joint's torque limit times K (:func:`check_strength`)."""
     parser.add_argument(

@@ -180,16 +180,19 @@ def literature_box(rule: str) -> tuple[float, float]:
     return entry[euler_names(joint).index(what)]
 
 
-def rule_box(rule: str) -> tuple[float, float]:
-    """A box rule's range as used: literature, widened by the train split if listed."""
-    return TRAIN_WIDENED.get(rule, literature_box(rule))
+def rule_box(rule: str, ranges: dict | None = None) -> tuple[float, float]:
+    """A box rule's range as used: ``ranges`` (default :data:`TRAIN_WIDENED`) if it lists
+    the rule, else the literature's."""
+    return (TRAIN_WIDENED if ranges is None else ranges).get(rule, literature_box(rule))
 
 
-def swing_limits_deg(joint: str) -> np.ndarray:
-    """The largest elevation per plane of :data:`BALL_PLANES_DEG` (train-widened), (8,)."""
+def swing_limits_deg(joint: str, ranges: dict | None = None) -> np.ndarray:
+    """The largest elevation per plane of :data:`BALL_PLANES_DEG`, (8,) degrees: from
+    ``ranges`` (default :data:`TRAIN_WIDENED`) where listed, else the literature's."""
+    ranges = TRAIN_WIDENED if ranges is None else ranges
     values = np.array(BALL_LITERATURE[base_name(joint)][0], dtype=float)
     for k, plane in enumerate(BALL_PLANES_DEG):
-        widened = TRAIN_WIDENED.get(swing_rule(joint, plane))
+        widened = ranges.get(swing_rule(joint, plane))
         if widened is not None:
             values[k] = widened[1]
     return values
@@ -214,13 +217,16 @@ def box_excess_deg(angle_deg, low: float, high: float) -> np.ndarray:
     return np.maximum(np.maximum(low - a, a - high), 0.0)
 
 
-def human_excess_deg(skeleton: Skeleton, posture_deg) -> np.ndarray:
+def human_excess_deg(skeleton: Skeleton, posture_deg, ranges: dict | None = None
+                     ) -> np.ndarray:
     """Degrees beyond the human range, per frame and rule.
 
     Parameters
     ----------
     skeleton : Skeleton
     posture_deg : array_like, shape (T, 63)
+    ranges : dict, optional
+        Rule ranges in place of :data:`TRAIN_WIDENED` (rules it lacks: the literature's).
 
     Returns
     -------
@@ -232,15 +238,17 @@ def human_excess_deg(skeleton: Skeleton, posture_deg) -> np.ndarray:
     for joint in JOINTS:
         kind, value = JOINT_KIND[joint], angles[joint]
         if kind == "hinge":
-            columns.append(box_excess_deg(value, *rule_box(columns_rule(joint, "flexion"))))
+            columns.append(box_excess_deg(value, *rule_box(columns_rule(joint, "flexion"),
+                                                              ranges)))
         elif kind == "ball":
-            allowed = allowed_elevation_deg(value[:, 1], swing_limits_deg(joint))
+            allowed = allowed_elevation_deg(value[:, 1], swing_limits_deg(joint, ranges))
             columns.append(np.maximum(value[:, 0] - allowed, 0.0))
-            twist = box_excess_deg(value[:, 2], *rule_box(f"{joint}.twist"))
+            twist = box_excess_deg(value[:, 2], *rule_box(f"{joint}.twist", ranges))
             columns.append(np.where(value[:, 0] <= TWIST_MAX_ELEVATION_DEG, twist, 0.0))
         else:
             for k, axis in enumerate(euler_names(joint)):
-                columns.append(box_excess_deg(value[:, k], *rule_box(f"{joint}.{axis}")))
+                columns.append(box_excess_deg(value[:, k],
+                                              *rule_box(f"{joint}.{axis}", ranges)))
     return np.stack(columns, axis=-1)
 
 
