@@ -19,7 +19,7 @@ from controller.checks.validity import (
 from humanoid_xml import build_mjcf
 from tests.conftest import FLAT_WALK_RUN
 from upm import Motion
-from upm.motion.skeleton import POSTURE_DOF_NAMES, joint_dof_index
+from upm.motion.skeleton import joint_dof_index
 
 
 @pytest.fixture(scope="module")
@@ -144,35 +144,30 @@ def test_window_frames_are_marked_and_judged_beyond_their_ends(model02, skeleton
 
 
 def test_calibration_on_the_test_split(calibration, catalog):
-    """The SPEC's calibration: about 60 % of test frames break an ASF limit somewhere,
-    05_11 nearly always; measured: 62.8 %, 99.5 %."""
+    """The calibrated verdict on the 3,079 test frames: measured 90.3 % valid (the ASF's
+    boxes: 38.7 %, with 61.3 % of the frames beyond them, 05_11 nearly always)."""
     test = calibration.totals(catalog.names("test"))
     assert test["frames"] == 3079
-    assert 50 < test["limit_violation_pct"] < 75
-    assert calibration.clips["05_11"]["limit_violation_pct"] > 95
-    assert 20 < test["valid_pct"] < 50  # measured 33.0 % (34.1 % before the heel)
+    assert test["valid_pct"] > 88
+    assert 50 < test["beyond_asf_pct"] < 75
+    assert calibration.clips["05_11"]["beyond_asf_pct"] > 95
+    assert calibration.clips["05_11"]["valid_pct"] > 85
+    for clip in ("02_01", "02_03", "03_01", "16_15"):  # walks, a run, uneven ground
+        assert calibration.clips[clip]["valid_pct"] == 100.0
 
 
 def test_calibration_on_every_clip(calibration):
-    """All 28,437 frames: 22.0 % valid, 76 % break a limit (mean largest excess 12.7
-    degrees), 16.8 % in self-collision, 7.9 % below the floor (22.4, 16.2 and 5.9 % before
-    the model had heels)."""
+    """All 28,437 frames: 94.2 % valid under the human verdict; the ASF's boxes are broken
+    in 73 % of them. What still fails is named: 05_06's cartwheel (its feet solved turned
+    through 90-105 degrees, and through the floor), 05_16's twisted thigh, 131_04's hands
+    deep in the pelvis."""
     total = calibration.totals()
     assert total["clips"] == 26 and total["frames"] == 28437
-    assert 10 < total["valid_pct"] < 40
-    assert 60 < total["limit_violation_pct"] < 90
-    assert 5 < total["limit_excess_mean_deg"] < 25
-    assert 5 < total["self_collision_pct"] < 30
-    assert 1 < total["floor_penetration_pct"] < 15
+    assert total["valid_pct"] > 92
+    assert 60 < total["beyond_asf_pct"] < 90
     walks = calibration.totals(FLAT_WALK_RUN)
-    # Walks stay near their limits and rarely touch themselves; dances do not.
-    assert walks["limit_excess_mean_deg"] < 5 < calibration.clips["05_06"]["limit_excess_mean_deg"]
-    assert walks["self_collision_pct"] < 10
-    # Flat walks and runs: 10.0 % of frames more than 1 cm below the floor, 3.5 % before
-    # the heel; most of it 05_01 (29 %), whose ankle comes 1.6 cm lower than the model's
-    # standing ankle height with the foot dorsiflexed, so the heel dips up to 3.7 cm.
-    assert walks["floor_penetration_pct"] < 15
-    assert walks["valid_pct"] > total["valid_pct"]
+    assert walks["valid_pct"] > 99
+    assert calibration.clips["05_06"]["valid_pct"] < 20
     for row in calibration.clips.values():
         assert row["valid_frames"] <= row["frames"] - max(row["limit_violation_frames"],
                                                           row["self_collision_frames"],

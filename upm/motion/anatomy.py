@@ -9,9 +9,9 @@ one table of ranges serves both sides.
 
 Per joint kind (:data:`JOINT_KIND`):
 
-- **hinge** (knee, elbow, toes): the rotation vector of L projected on the anatomical
-  hinge axis, degrees, positive in flexion (knee, elbow) or in extension (toes: the
-  toes bent up).
+- **hinge** (knee, elbow, toes): the rotation angle of L, degrees, signed by the side of
+  the anatomical hinge axis its rotation axis lies on: positive in flexion (knee, elbow)
+  or in extension (toes: the toes bent up).
 - **ball** (hip, shoulder): the limb's direction ``u = L d`` (``d`` the bone's rest
   direction) as *elevation* (degrees away from the neutral direction) in a *plane*
   (the azimuth of that swing, degrees), and the *twist* about the limb: the rotation
@@ -98,7 +98,9 @@ def rest_direction(skeleton: Skeleton, joint: str) -> np.ndarray:
 
 def hinge_angle_deg(local: np.ndarray, joint: str) -> np.ndarray:
     """Hinge angle of (T, 3, 3) joint rotations, (T,) degrees (see :data:`HINGE_AXIS`)."""
-    return np.rad2deg(rotation_log(local) @ HINGE_AXIS[base_name(joint)])
+    rotvec = rotation_log(local)
+    side = np.where(rotvec @ HINGE_AXIS[base_name(joint)] < 0, -1.0, 1.0)
+    return np.rad2deg(np.linalg.norm(rotvec, axis=-1)) * side
 
 
 def euler_angles_deg(local: np.ndarray, joint: str) -> np.ndarray:
