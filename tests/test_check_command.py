@@ -31,20 +31,32 @@ def test_check_an_amc_file_with_its_asf(tmp_path, data_dir, capsys):
     assert report["motion"]["frames"] == 173 and report["motion"]["fps"] == 120.0
     assert len(report["frames"]) == 173
     totals = report["totals"]["kinematic"]
-    # The run 02_03 leaves its limits in every frame (clips calibration: 100 %).
-    assert totals["limit_violation_frames"] == 173 and totals["valid_frames"] == 0
+    # The run 02_03 is humanly possible in every frame, and beyond its ASF's declared
+    # limits in every frame (reported, not judged)
+    assert totals["valid_frames"] == 173 and totals["beyond_asf_frames"] == 173
+    assert totals["limits"] == "human"
     frame = report["frames"][0]
-    assert frame["limit_violation"] and frame["limit_dofs"] and not frame["valid"]
+    assert frame["valid"] and frame["beyond_asf"] and not frame["limit_dofs"]
     assert 0 <= frame["residual_force_bw"] and frame["support_points"] >= 0
-    assert report["settings"]["floor_tolerance_mm"] == 10.0
+    assert report["settings"]["self_touch_mm"] == 10.0
+    # judged by the ASF's boxes instead, every frame breaks one
+    code = main(["check", str(tmp_path / "02_03.amc"), "--asf", str(tmp_path / "02.asf"),
+                 "--json", "--no-dynamics", "--limits", "asf"])
+    asf = json.loads(capsys.readouterr().out)
+    assert asf["totals"]["kinematic"]["limit_violation_frames"] == 173
+    assert asf["totals"]["kinematic"]["valid_frames"] == 0
+    assert asf["frames"][0]["limit_dofs"] and not asf["frames"][0]["valid"]
 
 
 def test_check_a_clip_prints_totals_and_invalid_frames(data_dir, capsys):
-    assert main(["check", "02_01@0:120", "--data", str(data_dir)]) == 0
+    # judged by the ASF's boxes, the walk has invalid frames to list (the human verdict
+    # finds none)
+    assert main(["check", "02_01@0:120", "--data", str(data_dir), "--limits", "asf"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("02_01@0:120: 120 frames at 120 fps")
-    for words in ("valid frames", "joint-limit violation", "self-collision",
-                  "floor penetration", "residual force", "invalid frames: 0-"):
+    for words in ("valid frames", "beyond the range", "self-interpenetration",
+                  "beyond the ASF limits", "floor penetration", "residual force",
+                  "invalid frames: 0-"):
         assert words in out
 
 
