@@ -50,31 +50,37 @@ class Metric:
 
 _METRICS = (
     Metric("valid_pct", "valid", "% of window frames", "higher",
-           "window frames with no joint-limit excess beyond what the two end postures "
-           "already have, no self-collision deeper than 1 mm and no geom more than 1 cm "
-           "below the floor (controller.checks.validity: valid_beyond_ends)"),
+           "window frames within the human range of motion (or beyond it no more than the "
+           "two end postures already are), with no self-contact deeper than its body pair's "
+           "soft-tissue allowance and no geom deeper below the floor than its class allows "
+           "(controller.checks.validity: valid_beyond_ends)"),
     Metric("raw_valid_pct", "valid (raw)", "% of window frames", "higher",
-           "as valid_pct, but any excess beyond the ASF limits counts, even one the end "
-           "postures already have (real CMU frames often do)"),
+           "as valid_pct, but any excess beyond the human range counts, even one the end "
+           "postures already have"),
     Metric("valid_added_pct", "valid (added)", "% of window frames", "higher",
            "as valid_pct, with self-collision also counted only where the method added it: "
-           "a contact deeper than 1 mm between a body pair that is not in self-collision at "
-           "either end posture (clip 2's postures on clip 1's body often are)"),
+           "a contact deeper than its allowance between a body pair that is not in "
+           "self-collision at either end posture (clip 2's postures on clip 1's body often "
+           "are)"),
     Metric("added_limit_mean_deg", "added limit", "deg", "lower",
-           "per window frame the largest excess of a DOF beyond its ASF range over the "
-           "larger excess of that DOF at the two end postures, averaged over the window"),
+           "per window frame the largest excess of a rule of the human range over the "
+           "larger excess of that rule at the two end postures, averaged over the window"),
     Metric("added_limit_max_deg", "added limit max", "deg", "lower",
            "the largest such added excess in the window"),
     Metric("self_collision_pct", "self-coll.", "% of window frames", "lower",
-           "window frames with a self-contact deeper than 1 mm between bodies the model "
-           "does not exclude"),
+           "window frames with a self-contact deeper than its body pair's soft-tissue "
+           "allowance (controller.checks.tissue) between bodies the model does not exclude"),
     Metric("self_collision_added_pct", "self-coll. (added)", "% of window frames", "lower",
            "window frames with a self-collision between a body pair not in self-collision "
            "at either end posture"),
     Metric("self_depth_max_mm", "self depth max", "mm", "lower",
            "the deepest self-contact in the window"),
     Metric("floor_penetration_pct", "floor", "% of window frames", "lower",
-           "window frames with a geom more than 1 cm below the floor"),
+           "window frames with a geom deeper below the floor than its class allows (a foot "
+           "5 cm, anything else 1 cm)"),
+    Metric("beyond_asf_pct", "beyond ASF", "% of window frames", "lower",
+           "window frames beyond a limit the ASF declares (the CMU's nominal boxes): "
+           "reported, not judged -- most real frames are"),
     Metric("nearest_real_mean_deg", "nearest real", "deg RMS", "lower",
            "per window frame, the wrapped distance to the nearest real posture of the test "
            "clips outside the pair's exclusion zones, as an RMS over the 45 declared DOFs; "

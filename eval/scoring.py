@@ -212,6 +212,7 @@ def score_window(model, motion, window: slice, real, zones) -> dict[str, float]:
         "self_collision_added_pct": 100.0 * added_self.mean(),
         "self_depth_max_mm": 1000.0 * validity.self_depth_m[inside].max(),
         "floor_penetration_pct": 100.0 * validity.floor_penetration[inside].mean(),
+        "beyond_asf_pct": 100.0 * validity.beyond_asf[inside].mean(),
         "nearest_real_mean_deg": nearest.mean(),
         "nearest_real_max_deg": nearest.max(),
         "jerk_rms_deg_s3": jerk,

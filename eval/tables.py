@@ -33,6 +33,7 @@ DISPLAY: dict[str, tuple[float, int, str]] = {
     "self_collision_added_pct": (1.0, 1, "self-collision added %"),
     "self_depth_max_mm": (1.0, 1, "self-contact max mm"),
     "floor_penetration_pct": (1.0, 1, "floor penetration %"),
+    "beyond_asf_pct": (1.0, 1, "beyond the ASF limits %"),
     "nearest_real_mean_deg": (1.0, 2, "nearest real deg"),
     "nearest_real_max_deg": (1.0, 2, "nearest real max deg"),
     "jerk_rms_deg_s3": (1e-3, 0, "jerk 10^3 deg/s^3"),
