@@ -1,7 +1,7 @@
 """The calibration harness: does the verdict agree with what humans did?
 
 - **specificity**: the share of real frames judged valid, per clip and per cause
-  (:func:`controller.checks.validity.calibrate`);
+  (:func:`controller.checks.calibration.calibrate`);
 - **sensitivity**: the share of impossible frames judged invalid, per family
   (:mod:`upm.motion.impossible`), made from every ``every``-th real frame of the same
   clips, and which cause caught them.
@@ -56,7 +56,7 @@ def sensitivity(catalog, names, limits=None, every: int = 10) -> dict[str, dict]
 
 def harness(catalog, names, limits=None, every: int = 10) -> dict:
     """Specificity and sensitivity of the verdict on some clips, JSON-ready."""
-    from controller.checks.validity import calibrate
+    from controller.checks.calibration import calibrate
 
     names = list(names)
     calibration = calibrate(catalog, names, limits=limits)

@@ -91,12 +91,13 @@ def test_the_checker_agrees_with_the_study(data_dir):
 
 def test_the_checker_finds_the_studys_floor_penetration(data_dir):
     """With the root, HumanoidChecker's floor check is the study's on a clip that goes
-    below the floor on some frames (a run)."""
+    below the floor, deeper than its body classes allow, on some frames (131_04: a toe
+    6 cm down)."""
     from humanoid_xml import catalog_model_path, load_model
 
     catalog = catalog_of(data_dir)
-    motion = catalog.load("02_03")
-    study = check_motion(load_model(catalog_model_path(catalog, "02_03")), motion)
+    motion = catalog.load("131_04")
+    study = check_motion(load_model(catalog_model_path(catalog, "131_04")), motion)
     colliding, floor = HumanoidChecker(motion.skeleton).frame_checks(
         motion.posture_deg, motion.root, names=False)
     assert study.floor_penetration.any() and not study.floor_penetration.all()
@@ -116,9 +117,10 @@ def _study_invalid_frames(data_dir, result) -> int:
 
 def test_the_window_check_counts_what_the_study_counts_and_keeps_the_better_window(
         data_dir, monkeypatch):
-    """02_01@200 -> 02_03@20: the window of the map's nearest collision-free key has frames
-    below the floor (the shared root runs low there); the alpha-point key's window has
-    fewer, and feasible keeps it."""
+    """02_01@200 -> 02_03@20: the window check counts the frames the study counts, for the
+    first candidate key's window and for the one feasible keeps; it keeps the better
+    (under the calibrated verdict the first candidate's window is already clean: a heel
+    pad on the floor is no longer a foot through it, so it keeps that one)."""
     before, after = pair(data_dir, 0)
     feasible = sources(data_dir)["feasible"]
     chosen = transition("feasible", before, after, 20, 0.5, feasible)
@@ -128,8 +130,9 @@ def test_the_window_check_counts_what_the_study_counts_and_keeps_the_better_wind
         assert result.diagnostics["floor_checked"] == 1.0
         assert result.diagnostics["window_invalid_frames"] == _study_invalid_frames(
             data_dir, result)
-    assert chosen.diagnostics["key_candidate"] == 1.0
-    assert _study_invalid_frames(data_dir, chosen) < _study_invalid_frames(data_dir, nearest)
+    assert _study_invalid_frames(data_dir, chosen) <= _study_invalid_frames(data_dir, nearest)
+    if _study_invalid_frames(data_dir, nearest) == 0:
+        assert chosen.diagnostics["key_candidate"] == 0.0
     assert _added_excess_deg(chosen).max() <= 1e-6
 
 

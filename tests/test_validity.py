@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from controller.checks.calibration import calibrate
 from controller.checks.validity import (
     FLOOR_TOLERANCE_M,
     added_excess,
-    calibrate,
     check_motion,
     frame_records,
     summarize,

@@ -264,11 +264,9 @@ def check_motion(model, motion, windows=(), limits=None) -> Validity:
 
 
 from controller.checks.validity_report import (  # noqa: E402  (the report of a Validity)
-    Calibration,
-    calibrate,
     frame_records,
     summarize,
 )
 
 __all__ = ["Validity", "check_motion", "limit_excess", "added_excess", "summarize",
-           "frame_records", "Calibration", "calibrate", "FLOOR_TOLERANCE_M"]
+           "frame_records", "FLOOR_TOLERANCE_M"]

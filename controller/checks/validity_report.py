@@ -1,18 +1,13 @@
-"""The report of a :class:`~controller.checks.validity.Validity`: totals, frame records,
-and the calibration over real clips (JSON-ready)."""
+"""The report of a :class:`~controller.checks.validity.Validity`: totals and frame
+records (JSON-ready). The functions take the Validity (duck-typed: this module imports
+nothing of the checks, so that validity can re-export it)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from controller.checks.validity import Validity
 
-
-def summarize(validity: Validity, part: slice | None = None) -> dict:
+def summarize(validity, part: slice | None = None) -> dict:
     """Totals of a part of the motion (all of it by default), JSON-ready.
 
     Returns
@@ -80,7 +75,7 @@ def summarize(validity: Validity, part: slice | None = None) -> dict:
     return out
 
 
-def frame_records(validity: Validity) -> list[dict]:
+def frame_records(validity) -> list[dict]:
     """One JSON-ready record per frame: ``frame``, ``time_s``, ``window`` (index or None),
     ``valid``, ``limit_violation``, ``limit_excess_max_deg``, ``limit_dofs`` (rule ->
     degrees beyond), ``self_collision``, ``self_depth_mm``, ``self_pairs`` (pairs beyond
@@ -125,63 +120,6 @@ def frame_records(validity: Validity) -> list[dict]:
             record["valid_beyond_ends"] = bool(beyond[t])
         records.append(record)
     return records
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """The kinematic checks of real clips, each on its own subject's model.
-
-    Attributes
-    ----------
-    clips : dict of str to dict
-        Per clip, :func:`summarize` of the whole clip (plus ``split``).
-    """
-
-    clips: dict[str, dict]
-
-    def totals(self, names=None) -> dict:
-        """Frame-weighted totals over some clips (all by default), JSON-ready."""
-        rows = [self.clips[n] for n in (self.clips if names is None else names)]
-        frames = sum(r["frames"] for r in rows)
-        out = {"clips": len(rows), "frames": frames}
-        for key in ("valid", "limit_violation", "self_collision", "floor_penetration",
-                    "beyond_asf"):
-            count = sum(r[f"{key}_frames"] for r in rows)
-            out[f"{key}_frames"] = count
-            out[f"{key}_pct"] = _pct(count, frames)
-        out["limit_excess_mean_deg"] = round(
-            sum(r["limit_excess_mean_deg"] * r["frames"] for r in rows) / max(frames, 1), 4)
-        out["limit_excess_peak_deg"] = max((r["limit_excess_peak_deg"] for r in rows),
-                                           default=0.0)
-        return out
-
-
-def calibrate(catalog, names=None, limits=None) -> Calibration:
-    """The kinematic checks of real clips: the calibration of every validity figure.
-
-    Parameters
-    ----------
-    catalog : upm.motion.catalog.Catalog
-    names : iterable of str, optional
-        Clip names (default: every clip).
-    limits : str, optional
-        The range model (default ``"human"``).
-    """
-    from controller.checks.validity import check_motion
-    from humanoid_xml import catalog_model_path, load_model
-    from upm.core.progress import progress
-
-    names = list(catalog.names() if names is None else names)
-    models: dict[str, object] = {}
-    clips = {}
-    for name in progress(names, desc="checking clips", unit="clip"):
-        info = catalog.info(name)
-        if info.subject not in models:
-            models[info.subject] = load_model(catalog_model_path(catalog, info.subject))
-        summary = summarize(check_motion(models[info.subject], catalog.load(name),
-                                         limits=limits))
-        clips[name] = {"split": info.split, **summary}
-    return Calibration(clips=clips)
 
 
 def _pct(count, total) -> float:

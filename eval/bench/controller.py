@@ -102,7 +102,7 @@ def run(context: BenchContext) -> dict:
         hard, hard_model = clip_on_humanoid(context, "16_15", quick_frames=120)
         out.update(_balance(hard_model, to_qpos(hard_model, hard), hard.fps, repeat=1,
                             prefix="balance_16_15_"))
-        from controller.checks.validity import calibrate
+        from controller.checks.calibration import calibrate
         from upm.motion.catalog import Catalog
 
         start = time.perf_counter()
