@@ -13,7 +13,11 @@ The model (``build_mjcf``):
   hinge per DOF its ASF declares, named ``<bone>_<dof>`` (``lfemur_rx``), listed in the
   order rz, ry, rx with axes ``C e_z, C e_y, C e_x`` (``C`` the bone's ASF axis frame):
   MuJoCo composes a body's joints in listed order, which gives Acclaim's
-  ``C Rz Ry Rx C^T`` (x applied first). ``range`` is the ASF limit, in degrees. The other
+  ``C Rz Ry Rx C^T`` (x applied first). ``range`` is the human range of motion, in
+  degrees (:func:`upm.motion.human_boxes.human_dof_boxes`: a hinge joint's anatomical
+  range exactly; for a joint of two or three DOFs, the envelope of its coupled human
+  range, so that the body can reach every posture a human reaches — not the ASF's
+  nominal boxes, which 61-85 % of real frames break). The other
   bones (hip joints, upperneck, wrists, fingers, thumbs) have no joint: they weld to their
   parent, keeping their offsets, exactly as in the project's kinematics.
 - **Geoms and masses** (:mod:`humanoid_xml.body`): capsules sized from the bones, masses
@@ -60,10 +64,11 @@ from humanoid_xml.servos import servo_gains
 from humanoid_xml.strength import torque_limits_nm
 from humanoid_xml.validate import check_skeleton
 from upm.core.errors import DataFileError
-from upm.motion.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton
+from upm.motion.human_boxes import human_dof_boxes
+from upm.motion.skeleton import JOINTS, POSTURE_DOF_NAMES, Skeleton, joint_dof_index
 
 #: Bumped by hand when the model changes in a way the source digest would not show.
-GENERATOR_VERSION = "4"
+GENERATOR_VERSION = "5"
 #: Joint limits: MuJoCo's constraint reference (time constant s, damping ratio) and
 #: impedance (d0, d_width, width rad, midpoint, power), see the module docstring.
 LIMIT_SOLREF = (0.005, 1.0)
@@ -108,6 +113,7 @@ def _body_xml(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float) ->
         geoms_of.setdefault(g.bone, []).append(g)
     joints = set(JOINTS)
     lines: list[str] = []
+    human_boxes = human_dof_boxes(skeleton)
 
     def emit(b: int, depth: int) -> None:
         pad = "  " * depth
@@ -123,10 +129,9 @@ def _body_xml(skeleton: Skeleton, geoms: list[Capsule], root_height_m: float) ->
             lines.append(f'{pad}<body name="{bone}" pos="{_vec(parent_offset)}">')
         if bone in joints:
             axes = vectors_to_mj(skeleton.axis_matrices[b].T)  # row k = C e_k in MuJoCo axes
-            limits = dict(zip(skeleton.dofs[b], skeleton.dof_limits_deg[b], strict=True))
             for dof in _HINGE_ORDER:
-                if dof in limits:
-                    lo, hi = limits[dof]
+                if dof in skeleton.dofs[b]:
+                    lo, hi = human_boxes[joint_dof_index(bone, dof)]
                     lines.append(f'{pad}  <joint name="{bone}_{dof}" '
                                  f'axis="{_vec(axes[_AXIS_COLUMN[dof]])}" '
                                  f'range="{_num(lo)} {_num(hi)}"/>')

@@ -28,6 +28,10 @@ def generator_digest() -> str:
     import mujoco
 
     sources = [(_PACKAGE / name).read_bytes() for name in _GENERATOR_SOURCES]
+    # the hinge ranges are the human range of motion's (upm.motion.human_boxes)
+    motion = _PACKAGE.parent / "upm" / "motion"
+    sources += [(motion / name).read_bytes()
+                for name in ("anatomy.py", "human_rom.py", "human_boxes.py")]
     return digest(GENERATOR_VERSION, mujoco.__version__, *sources)
 
 

@@ -17,8 +17,10 @@ from humanoid_xml.body import BMI_KG_M2, SEGMENT_MASS_FRACTIONS, capsules, statu
 from humanoid_xml.exclusions import EXCLUDED_PAIRS
 from humanoid_xml.frames import ASF_TO_MJ, vectors_to_mj
 from humanoid_xml.servos import SAG_DEG, SERVO_FREQUENCY_HZ, servo_gains
+from tests.conftest import FLAT_WALK_RUN
 from upm import Motion, read_amc, read_asf
 from upm.core.errors import DataFileError
+from upm.motion.human_boxes import human_dof_boxes
 from upm.motion.kinematics import forward_kinematics, global_transforms
 from upm.motion.skeleton import POSTURE_DOF_NAMES, joint_dof_index
 
@@ -100,7 +102,9 @@ def test_body_rotations_equal_project_fk(walk, models):
         np.testing.assert_allclose(theirs, ASF_TO_MJ @ rotations[t] @ ASF_TO_MJ.T, atol=1e-6)
 
 
-def test_joint_ranges_are_the_asf_limits(skeletons, models):
+def test_joint_ranges_are_the_human_range(skeletons, models, catalog):
+    """The hinges' ranges are the human range's boxes (not the ASF's nominal ones), and
+    they hold every real frame of the subject's walks and runs."""
     for subject, model in models.items():
         skeleton = skeletons[subject]
         hinges = {}
@@ -116,9 +120,14 @@ def test_joint_ranges_are_the_asf_limits(skeletons, models):
                 continue
             j = hinges[name]
             assert model.jnt_limited[j]
-            np.testing.assert_allclose(np.rad2deg(model.jnt_range[j]), skeleton.limits_deg[i],
-                                       atol=1e-9)
+            np.testing.assert_allclose(np.rad2deg(model.jnt_range[j]),
+                                       human_dof_boxes(skeleton)[i], atol=1e-9)
         assert "ltibia_ry" not in hinges and "lclavicle_rx" not in hinges
+        for clip in (c for c in FLAT_WALK_RUN if catalog.info(c).subject == subject):
+            posture = (catalog.load(clip).posture_deg + 180.0) % 360.0 - 180.0
+            boxes = human_dof_boxes(skeleton)
+            inside = (posture >= boxes[:, 0] - 1e-6) & (posture <= boxes[:, 1] + 1e-6)
+            assert inside[:, skeleton.declared].all(), clip  # the ASF boxes: 37-100 % out
         assert {"lfemur_rx", "lfemur_ry", "lfemur_rz"} <= set(hinges)
         # Bones outside the 21 joints carry no joint (they weld to their parent).
         for bone in ("lhipjoint", "upperneck", "lwrist", "lfingers", "lthumb"):
@@ -470,8 +479,8 @@ def test_synthetic_humanoids_have_the_asf_ranges_and_their_statures(synthetic_ca
         for name in names:
             j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
             i = POSTURE_DOF_NAMES.index(name.replace("_", "."))
-            np.testing.assert_allclose(np.rad2deg(model.jnt_range[j]), skeleton.limits_deg[i],
-                                       atol=1e-9)
+            np.testing.assert_allclose(np.rad2deg(model.jnt_range[j]),
+                                       human_dof_boxes(skeleton)[i], atol=1e-9)
         statures[subject] = stature_m(skeleton, capsules(skeleton))
         assert float(model.body_mass.sum()) == pytest.approx(BMI_KG_M2 * statures[subject] ** 2,
                                                              rel=1e-4)

@@ -111,41 +111,45 @@ def test_reference_that_lies_down_is_not_a_fall(model02):
 
 
 def test_joint_limit_activity_names_the_joint(model02, catalog):
-    """Driving lfemur.rx toward 20 degrees past its limit: the servo's target is clamped
-    to the range, so the joint stops short of it (error -20 degrees). With the clamp off,
-    the servo pushes into the limit and the limit rows say which joint."""
+    """Driving ltibia.rx toward 20 degrees of hyperextension past its (human) limit: the
+    servo's target is clamped to the range, so the joint stops short of it (error +20
+    degrees). With the clamp off, the servo pushes into the limit and the limit rows say
+    which joint."""
     from upm import Motion
+    from upm.motion.human_boxes import human_dof_boxes
 
     skeleton = catalog.skeleton("02")
-    dof = joint_dof_index("lfemur", "rx")
+    dof = joint_dof_index("ltibia", "rx")
+    lo = human_dof_boxes(skeleton)[dof, 0]
     posture = np.zeros((60, 63))
-    posture[:, dof] = np.linspace(0.0, skeleton.limits_deg[dof, 1] + 20.0, 60)
+    posture[:, dof] = np.linspace(0.0, lo - 20.0, 60)
     root = np.tile([0.0, float(model02.qpos0[2]) + 0.1, 0.0, 0.0, 0.0, 0.0], (60, 1))
     motion = Motion(skeleton, posture, root, fps=120.0)
     layout = joint_layout(model02)
-    hinge = layout.names.index("lfemur.rx")
-    hi = np.deg2rad(skeleton.limits_deg[dof, 1])
+    hinge = layout.names.index("ltibia.rx")
+    lo = np.deg2rad(lo)
 
     clamped = track(model02, motion, "driven")
-    assert clamped.qpos[-1, layout.qpos_address[hinge]] <= hi + 1e-3
-    assert clamped.dof_error_deg[-1, hinge] == pytest.approx(-20, abs=3)
+    assert clamped.qpos[-1, layout.qpos_address[hinge]] >= lo - 1e-3
+    assert clamped.dof_error_deg[-1, hinge] == pytest.approx(20, abs=3)
     # ... while the servo does reach the reachable target, the limit itself.
     assert abs(clamped.dof_reachable_error_deg[-1, hinge]) < 3
     assert (clamped.summary()["reachable_error_deg_rms"]
             < clamped.summary()["error_deg_rms"])
-    # The joints on their limits at the zero posture: the clavicles' rz, whose range
-    # ends at 0 on this skeleton ([-20, 0] and [0, 20]).
-    assert {"lclavicle.rz", "rclavicle.rz"} <= set(clamped.limit_joint_frames)
+    # the human range holds the zero posture inside every hinge's range (the ASF's
+    # boxes had the clavicles' rz on a limit at 0)
+    assert "ltibia.rx" in clamped.limit_joint_frames
+    assert not {"lclavicle.rz", "rclavicle.rz"} & set(clamped.limit_joint_frames)
 
     unclamped_model = copy.copy(model02)
-    actuator = mujoco.mj_name2id(model02, mujoco.mjtObj.mjOBJ_ACTUATOR, "lfemur_rx")
+    actuator = mujoco.mj_name2id(model02, mujoco.mjtObj.mjOBJ_ACTUATOR, "ltibia_rx")
     unclamped_model.actuator_ctrllimited[actuator] = 0
     pushed = track(unclamped_model, motion, "driven")
-    assert pushed.limit_joint_frames.get("lfemur.rx", 0) > 5
+    assert pushed.limit_joint_frames.get("ltibia.rx", 0) > 5
     assert pushed.limit_rows[-5:].min() >= 1
     # The limit holds: the servo pushes at its full strength, the joint stays within a
     # degree of its limit (MuJoCo's default soft limit let it 9 degrees through).
-    beyond = np.rad2deg(pushed.qpos[-1, layout.qpos_address[hinge]] - hi)
+    beyond = np.rad2deg(lo - pushed.qpos[-1, layout.qpos_address[hinge]])
     assert -0.01 < beyond < 1
 
 

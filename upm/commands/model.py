@@ -1,7 +1,7 @@
 """Write the MuJoCo humanoid (MJCF) of a skeleton.
 
 The model has a body per ASF bone at the skeleton's own offsets (z up), one hinge per
-DOF the ASF declares for the 21 posture joints (range = the ASF limits), capsule geoms
+DOF the ASF declares for the 21 posture joints (range = the human range of motion), capsule geoms
 with a plausible adult mass, self-collision, and a position actuator per hinge. Give one
 of:
 
