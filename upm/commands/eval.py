@@ -7,9 +7,11 @@ two different test clips (all resampled to 120 fps); every method builds the win
 (upm, som, the two ablations classnn and snap, linear, slerp, inertialize, spacetime),
 and each window is scored on the MuJoCo humanoid of clip 1's subject:
 
-  - kinematic validity: valid frames (no joint-limit excess beyond what the two end
-    postures already have, no self-collision > 1 mm, no floor penetration > 1 cm), the
-    added limit excess, self-collision, floor penetration;
+  - kinematic validity (the calibrated verdict: upm calibrate): valid frames (within the
+    human range of motion or no further beyond it than the two end postures, no
+    self-contact deeper than its body pair's soft-tissue allowance, nothing through the
+    floor), the added excess, self-collision, floor penetration, and the frames beyond
+    the ASF's declared limits (reported, not judged);
   - distance to the nearest real posture of the test clips outside the pair's own
     neighbourhood (deg RMS over the 45 declared DOFs);
   - joint jerk (across the joins too), foot skating (horizontal foot speed below 5 cm),
