@@ -135,3 +135,26 @@ def test_touching_is_allowed_and_interpenetration_is_not(catalog, model02):
     through = check_motion(model02, walk.replace(posture_deg=posture, root=root))
     assert through.self_collision.all()
     assert through.self_excess_m.min() > 0.02
+
+
+def test_the_calibrate_command_reports_both_figures(data_dir, tmp_path, capsys):
+    """upm calibrate on one clip: its JSON has the specificity (human and ASF verdicts)
+    and every family's sensitivity; the report, its Markdown table and the figure are
+    written; bad input is a one-line error."""
+    from upm.cli import main
+
+    report, figure = tmp_path / "cal.json", tmp_path / "cal.png"
+    assert main(["calibrate", "02_01", "--data", str(data_dir), "--every", "60", "--json",
+                 "--report", str(report), "--figure", str(figure)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert json.loads(report.read_text()) == result
+    assert result["specificity"]["totals"]["valid_pct"] == 100.0
+    assert result["specificity"]["asf_totals"]["valid_pct"] < 70
+    assert set(result["sensitivity"]) == set(FAMILIES)
+    assert all(row["invalid_pct"] == 100.0 for row in result["sensitivity"].values())
+    assert "| knee_hyperextension |" in report.with_suffix(".md").read_text()
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+    assert main(["calibrate", "02_01", "--data", str(data_dir), "--every", "0"]) == 2
+    assert "--every must be at least 1" in capsys.readouterr().err
+    assert main(["calibrate", "99_99", "--data", str(data_dir)]) == 2
+    assert "no clip '99_99'" in capsys.readouterr().err
