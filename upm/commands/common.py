@@ -109,6 +109,41 @@ def check_effort(args) -> None:
                              "offline (its budget is [offline] budget in --config)")
 
 
+def add_performed_config_argument(parser) -> None:
+    """``--config FILE.toml`` of ``upm transition`` / ``upm sequence``: the ``performed``
+    method's configuration (:func:`performed_setup`)."""
+    parser.add_argument(
+        "--config", metavar="FILE.toml", default=None,
+        help="with --method performed: the humanoid's configuration (its [offline] section "
+             "sets the search), from a TOML file (default: the built-in constants)")
+
+
+def performed_setup(args):
+    """For ``--method performed``: install the humanoid's performer and return its
+    configuration (``--config``'s, else the defaults; ``args.performer_config`` too);
+    for other methods a :class:`upm.core.errors.UsageError` if ``--follow`` or (where the
+    command's ``--config`` is only the performer's) ``--config`` is given; None."""
+    from upm.core.errors import UsageError
+
+    own_config = args.command in ("transition", "sequence")
+    if args.method != "performed":
+        if getattr(args, "follow", None) is not None:
+            raise UsageError("--follow goes with --method performed")
+        if own_config and getattr(args, "config", None) is not None:
+            raise UsageError("--config sets the humanoid of --method performed: it goes "
+                             "with that method")
+        args.performer_config = None
+        return None
+    from controller.offline.performer import install
+
+    install()
+    config = controller_config(args)
+    if not own_config:
+        config = config.with_threads(getattr(args, "threads", None))
+    args.performer_config = config
+    return config
+
+
 def print_json(obj) -> None:
     """Print ``obj`` as indented JSON on stdout."""
     json.dump(obj, sys.stdout, indent=2)

@@ -154,7 +154,12 @@ def run(args) -> int:
     )
     from controller.report import write_report
     from humanoid_xml import catalog_model_path, load_model
-    from upm.commands.common import check_effort, check_strength, controller_config
+    from upm.commands.common import (
+        check_effort,
+        check_strength,
+        controller_config,
+        performed_setup,
+    )
     from upm.commands.transition import sequence_from_args
     from upm.core.errors import UsageError
 
@@ -193,6 +198,7 @@ def run(args) -> int:
         raise UsageError("--viewer needs a display (DISPLAY is not set); use --video V.mp4 "
                          "to render offscreen instead")
     config = controller_config(args).with_threads(args.threads)
+    performed_setup(args)
     catalog, refs, sequence = sequence_from_args(args, args.sequence)
     motion = sequence.motion
     if args.offset_deg > 0:

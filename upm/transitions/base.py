@@ -178,6 +178,11 @@ class TransitionMethod:
     needs_map : bool
         Whether the key source is a trained posture map (``--map``; the study trains
         it), rather than nothing or something fitted on the data at once.
+    finish : callable or None
+        For a method whose window is made from the assembled transition:
+        ``finish(transition: Transition, key_source) -> Transition``, called on the
+        transition ``solve``'s window made (``performed``: what the humanoid did while
+        following it). None for the others.
     """
 
     name: str
@@ -189,6 +194,7 @@ class TransitionMethod:
     key_help: str = ""
     role: str = "baseline"
     needs_map: bool = False
+    finish: Callable | None = None
 
     def __post_init__(self):
         if self.role not in ROLES:

@@ -20,13 +20,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from upm.core.errors import UsageError
-from upm.transitions import feasible, inertialize, keyposture, linear, slerp, spacetime
+from upm.transitions import (
+    feasible,
+    inertialize,
+    keyposture,
+    linear,
+    performed,
+    slerp,
+    spacetime,
+)
 from upm.transitions.base import KeyPostureSource, TransitionMethod
 
 #: The methods the project ships, in table order.
 _BUILT_IN: tuple[TransitionMethod, ...] = (
     keyposture.UPM, keyposture.SOM, keyposture.CLASSNN, keyposture.SNAP, linear.METHOD,
-    slerp.METHOD, inertialize.METHOD, spacetime.METHOD, feasible.METHOD,
+    slerp.METHOD, inertialize.METHOD, spacetime.METHOD, feasible.METHOD, performed.METHOD,
 )
 
 #: Every transition method, by name (registration order).
@@ -99,6 +107,11 @@ class KeySourceContext:
         The method being built (set by :func:`build_key_source`; for error messages).
     map_used : bool
         Whether a builder read ``map_path`` (``--map`` given but unused is warned about).
+    follow : str or None
+        ``performed``'s followed method (``--follow``; None: ``feasible``).
+    performer_config : object or None
+        ``performed``'s performer configuration (a
+        :class:`controller.config.ControllerConfig`, ``--config``; None: the defaults).
     """
 
     catalog: object | None = None
@@ -108,6 +121,8 @@ class KeySourceContext:
     train_step: int = 1
     method: str = ""
     map_used: bool = False
+    follow: str | None = None
+    performer_config: object | None = None
     _maps: dict = field(default_factory=dict, repr=False)
     _postures: np.ndarray | None = field(default=None, repr=False)
 

@@ -1,0 +1,163 @@
+"""``performed``: the window as the free-root humanoid performed it.
+
+Another method's window (``feasible``'s by default: :attr:`PerformedKeys.follow`, ``--follow
+METHOD``) is made first, as that method makes it; then the humanoid, its root free on the
+floor and no force on it but the floor's, follows the transition from the clip's own
+state a little before the window to a little after it (the configuration's
+``window_runs``: 0.5 s each side, as the controller's other window runs), in the offline
+effort (a sampling search over its servos' targets, :mod:`controller.offline`); what it
+did in the window's frames — joints and root, contacts included — converted back to the
+subject's joint angles, is the window. Clip 2 is kept where the followed method put it.
+
+Where the body cannot perform the asked window (it falls, or the search was in trouble
+in the window), that is a finding, reported in the transition's diagnostics
+(``performed_fell``, ``performed_left_window``), not an error.
+
+This layer does not import the humanoid: the performer is installed by the layer that
+has it (:func:`install_performer`; the command line and the study install
+:func:`controller.offline.performer.perform_transition`). Without one, the method is a
+:class:`upm.core.errors.UsageError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from upm.core.errors import UsageError
+from upm.transitions.base import Transition, TransitionMethod, WindowProblem, WindowResult
+
+#: The method followed when none is named.
+DEFAULT_FOLLOW = "feasible"
+
+#: The installed performer (None until the application layer installs one).
+_PERFORMER: list[Callable | None] = [None]
+
+
+@dataclass(frozen=True)
+class PerformedWindow:
+    """What the performer returns.
+
+    Attributes
+    ----------
+    posture_deg : ndarray, shape (L, 63)
+        The performed window's joint angles, degrees.
+    root : ndarray, shape (L, 6)
+        Its root: tx, ty, tz metres, rx, ry, rz degrees (the skeleton's root order).
+    figures : dict of str to float
+        How it went (joint and body error against the asked window, fall, trouble,
+        torque saturation, cost): the transition's diagnostics, prefixed ``performed_``.
+    """
+
+    posture_deg: np.ndarray
+    root: np.ndarray
+    figures: dict
+
+
+def install_performer(performer: Callable | None) -> None:
+    """Make ``performer(transition, context_s, config) -> PerformedWindow`` the one the
+    method calls (None: none). ``context_s`` None: the configuration's own."""
+    _PERFORMER[0] = performer
+
+
+def installed_performer() -> Callable | None:
+    return _PERFORMER[0]
+
+
+@dataclass(frozen=True, eq=False)
+class PerformedKeys:
+    """The key source of ``performed``: the followed method, its own key source, and the
+    performer's configuration (a :class:`controller.config.ControllerConfig`, opaque here;
+    None: the defaults).
+
+    Attributes
+    ----------
+    follow : str
+    source : KeyPostureSource or None
+    config : object or None
+    context_s : float or None
+        Context before and after the window, s (None: the configuration's).
+    """
+
+    follow: str
+    source: object | None = None
+    config: object | None = None
+    context_s: float | None = None
+    kind = "performed"
+
+    def key_posture(self, a_deg, b_deg, alpha=0.5):
+        """The followed method's key posture (a linear blend for a method without one)."""
+        if self.source is not None:
+            return self.source.key_posture(a_deg, b_deg, alpha)
+        a, b = np.asarray(a_deg, dtype=float), np.asarray(b_deg, dtype=float)
+        return a + alpha * (b - a)
+
+
+def performed_key_source(context) -> PerformedKeys:
+    """The key source of ``performed`` from a :class:`upm.transitions.registry.KeySourceContext`
+    (its ``follow`` and ``performer_config``)."""
+    from upm.transitions.registry import build_key_source, get_method
+
+    follow = context.follow or DEFAULT_FOLLOW
+    if follow == "performed":
+        raise UsageError("--follow performed: follow another method (e.g. feasible, linear)")
+    spec = get_method(follow)
+    source = build_key_source(spec, context)
+    context.method = "performed"
+    return PerformedKeys(follow=follow, source=source, config=context.performer_config)
+
+
+def _keys(key_source) -> PerformedKeys:
+    if not isinstance(key_source, PerformedKeys):
+        raise UsageError("method 'performed' needs its key source "
+                         "(upm.transitions.build_key_source('performed', context))")
+    return key_source
+
+
+def solve(problem: WindowProblem) -> WindowResult:
+    """The followed method's window (what the humanoid is asked to perform)."""
+    from upm.transitions.registry import get_method
+
+    keys = _keys(problem.key_source)
+    spec = get_method(keys.follow)
+    return spec.solve(dataclasses.replace(problem, key_source=keys.source))
+
+
+def finish(result: Transition, key_source) -> Transition:
+    """The transition with its window replaced by what the humanoid performed."""
+    import time
+
+    keys = _keys(key_source)
+    performer = installed_performer()
+    if performer is None:
+        raise UsageError("method 'performed' needs the humanoid's performer: run it from the "
+                         "command line (upm transition/sequence/simulate/eval), or install "
+                         "one (upm.transitions.performed.install_performer)")
+    start = time.perf_counter()
+    done = performer(result, keys.context_s, keys.config)
+    seconds = time.perf_counter() - start
+    window = result.window
+    posture = np.array(result.motion.posture_deg, dtype=float)
+    root = np.array(result.motion.root, dtype=float)
+    posture[window] = done.posture_deg
+    root[window] = done.root
+    motion = result.motion.replace(posture_deg=posture, root=root)
+    diagnostics = dict(result.diagnostics)
+    diagnostics.update({f"performed_{k}": float(v) for k, v in done.figures.items()})
+    return dataclasses.replace(result, motion=motion, method="performed",
+                               seconds=result.seconds + seconds, diagnostics=diagnostics)
+
+
+METHOD = TransitionMethod(
+    name="performed", solve=solve, finish=finish, continuity="C0", key_kind="performed",
+    summary="the window as the free-root humanoid performed it while following another "
+            "method's (feasible by default, --follow), found by the offline effort's search "
+            "(about a minute per window)",
+    key_source=performed_key_source,
+    key_help="the followed method's key source and the humanoid's performer "
+             "(upm.transitions.build_key_source('performed', context))",
+    role="recommended", needs_map=False,
+)
