@@ -142,7 +142,7 @@ class WindowResult:
 
 
 #: The roles a method can play in the study (see :class:`TransitionMethod`), in table order.
-ROLES = ("recommended", "paper", "paper-comparison", "baseline", "ablation")
+ROLES = ("recommended", "paper", "paper-comparison", "baseline", "ablation", "performed")
 
 
 @dataclass(frozen=True)
@@ -172,8 +172,9 @@ class TransitionMethod:
     role : str
         What the method is in the study (one of :data:`ROLES`): ``"paper"`` (the paper's
         method), ``"paper-comparison"`` (what the paper compares it with), ``"recommended"``
-        (the method the project recommends), ``"baseline"`` (another standard method) or
-        ``"ablation"`` (a part of a method taken away). Tables, figures and the studio
+        (the method the project recommends), ``"baseline"`` (another standard method),
+        ``"ablation"`` (a part of a method taken away) or ``"performed"`` (the window as the
+        humanoid performed another method's). Tables, figures and the studio
         read it.
     needs_map : bool
         Whether the key source is a trained posture map (``--map``; the study trains

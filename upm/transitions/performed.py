@@ -159,5 +159,5 @@ METHOD = TransitionMethod(
     key_source=performed_key_source,
     key_help="the followed method's key source and the humanoid's performer "
              "(upm.transitions.build_key_source('performed', context))",
-    role="recommended", needs_map=False,
+    role="performed", needs_map=False,
 )
