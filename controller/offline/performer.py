@@ -56,7 +56,9 @@ def perform_transition(transition, context_s: float | None = None, config=None):
         segment that overlaps the window), ``torque_saturation_share`` (the window's
         frames), ``root_drift_m`` (at the window's end), ``join_step_a_deg`` and
         ``join_step_b_deg`` (RMS over the DOFs of the step from A to the first window frame
-        and from the last to B), ``rollouts``, ``wall_s``.
+        and from the last to B), ``rollouts``, ``wall_s``, ``path_shift_m`` (the horizontal
+        shift that joins the performed path to A's: the run starts before A and drifts; on
+        the flat floor the shifted motion is as physical).
     """
     from controller.offline import perform
     from controller.offline.samcon import segment_bounds
@@ -82,6 +84,15 @@ def perform_transition(transition, context_s: float | None = None, config=None):
     qpos = np.where(finite[:, None], qpos, asked[w0:w1])  # a diverged run: the asked frames
     done = from_qpos(model, qpos, motion.skeleton, fps)
     root = done.root.copy()
+    # The floor is flat: the same motion moved along it is as physical. Moved so that the
+    # body's path joins A's (the run started before A and drifted): the horizontal shift
+    # that puts its pelvis at A where A's is.
+    at_a = w0 - 1 - a
+    shift = np.zeros(2)
+    if at_a >= 0 and np.all(np.isfinite(result.qpos[at_a])):
+        performed_a = from_qpos(model, result.qpos[at_a][None], motion.skeleton, fps).root[0]
+        shift = motion.root[w0 - 1, [0, 2]] - performed_a[[0, 2]]
+    root[:, [0, 2]] += shift
     previous = motion.root[w0 - 1, 3:] if w0 > 0 else root[0, 3:]
     for t in range(root.shape[0]):  # the root's angles continue from A's, as join's do
         root[t, 3:] = previous + angle_diff_deg(root[t, 3:], previous)
@@ -112,5 +123,6 @@ def perform_transition(transition, context_s: float | None = None, config=None):
         "rollouts": float(result.samples),
         "wall_s": float(result.wall_s),
         "diverged_frames": float(np.count_nonzero(~finite)),
+        "path_shift_m": float(np.linalg.norm(shift)),
     }
     return PerformedWindow(posture_deg=posture, root=root, figures=figures)

@@ -3,8 +3,10 @@ the servos' targets, its rollouts on ``offline.threads`` threads, and the replay
 seconds per simulated second, against a bare ``mj_step`` loop on one thread feeding the
 same model the plan's servo targets, measured in the same run: the ratio is the search's
 cost in raw ``mj_step`` equivalents per simulated step (about ``samples`` x the passes it
-makes, over the threads, plus the cost's kinematics). Quick mode: 0.4 s of the clip and 24
-samples, not 1 s and the configuration's 240."""
+makes, over the threads, plus the cost's kinematics); and one transition of the method
+``performed`` (following ``linear``, 02_01@200 -> 02_03@20, 20 frames, 0.5 s of context
+each side), in seconds (the transitions bench has the other methods' microseconds). Quick
+mode: 0.4 s of the clip and 24 samples, not 1 s and the configuration's 240."""
 
 from __future__ import annotations
 
@@ -51,6 +53,7 @@ def run(context: BenchContext) -> dict:
     result = perform(model, qpos, motion.fps, config)
     wall = time.perf_counter() - clock
     simulated_s = (motion.n_frames - 1) / motion.fps
+    performed_s = _performed_transition_s(context, config)
     per_s = wall / simulated_s
     ratio = wall / raw_s
     return {
@@ -67,5 +70,24 @@ def run(context: BenchContext) -> dict:
         "wall_s_per_sim_s": per_s,
         "reference_mj_step_per_s": plan.steps / raw_s,
         "ratio_to_mj_step": ratio,
+        "performed_s_per_transition": performed_s,
         "targets": {"wall_s_per_sim_s": target(per_s, TARGET_S_PER_S, ratio, TARGET_RATIO)},
     }
+
+
+def _performed_transition_s(context: BenchContext, config) -> float:
+    """Wall seconds of one ``performed`` transition (following ``linear``)."""
+    from controller.offline.performer import install
+    from upm.motion.catalog import Catalog
+    from upm.transitions import transition
+    from upm.transitions.performed import PerformedKeys
+
+    install()
+    catalog = Catalog(context.data_dir)
+    if "02_01" not in catalog or "02_03" not in catalog:
+        return float("nan")
+    before = catalog.load("02_01").frames(80, 201)
+    after = catalog.load("02_03").frames(20, 140)
+    clock = time.perf_counter()
+    transition("performed", before, after, 20, 0.5, PerformedKeys("linear", config=config))
+    return time.perf_counter() - clock

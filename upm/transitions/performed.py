@@ -7,7 +7,9 @@ state a little before the window to a little after it (the configuration's
 ``window_runs``: 0.5 s each side, as the controller's other window runs), in the offline
 effort (a sampling search over its servos' targets, :mod:`controller.offline`); what it
 did in the window's frames — joints and root, contacts included — converted back to the
-subject's joint angles, is the window. Clip 2 is kept where the followed method put it.
+subject's joint angles, is the window, moved along the floor so that its path joins A's
+(the run starts before A and drifts; on a flat floor the moved motion is as physical), and
+clip 2 is moved along the floor to continue where the body ended.
 
 Where the body cannot perform the asked window (it falls, or the search was in trouble
 in the window), that is a finding, reported in the transition's diagnostics
@@ -142,8 +144,11 @@ def finish(result: Transition, key_source) -> Transition:
     window = result.window
     posture = np.array(result.motion.posture_deg, dtype=float)
     root = np.array(result.motion.root, dtype=float)
+    asked_end = root[window.stop - 1, [0, 2]].copy()
     posture[window] = done.posture_deg
     root[window] = done.root
+    # clip 2 continues where the body ended (moved along the floor: ASF x and z)
+    root[window.stop:, [0, 2]] += root[window.stop - 1, [0, 2]] - asked_end
     motion = result.motion.replace(posture_deg=posture, root=root)
     diagnostics = dict(result.diagnostics)
     diagnostics.update({f"performed_{k}": float(v) for k, v in done.figures.items()})
