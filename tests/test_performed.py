@@ -14,7 +14,7 @@ from upm.cli import main
 from upm.core.errors import UsageError
 from upm.motion.amc import read_amc
 from upm.ops.angles import angle_diff_deg
-from upm.transitions import Transition, performed, transition
+from upm.transitions import METHODS, Transition, performed, transition
 from upm.transitions.performed import PerformedKeys
 
 #: A small search: seconds per window, not a minute.
@@ -27,7 +27,7 @@ def test_without_the_performer_it_is_a_usage_error(synthetic_catalog, monkeypatc
     before = synthetic_catalog.load("81_01").frames(0, 30)
     after = synthetic_catalog.load("81_02").frames(0, 30)
     with pytest.raises(UsageError, match="needs the humanoid's performer"):
-        transition("performed", before, after, 10, 0.5, PerformedKeys(follow="linear"))
+        transition("performed", before, after, 10, 0.5, PerformedKeys(follow=METHODS["linear"]))
     with pytest.raises(UsageError, match="no key_posture"):
         transition("performed", before, after, 10, 0.5, object())
 

@@ -79,7 +79,7 @@ def _performed_transition_s(context: BenchContext, config) -> float:
     """Wall seconds of one ``performed`` transition (following ``linear``)."""
     from controller.offline.performer import install
     from upm.motion.catalog import Catalog
-    from upm.transitions import transition
+    from upm.transitions import get_method, transition
     from upm.transitions.performed import PerformedKeys
 
     install()
@@ -89,5 +89,6 @@ def _performed_transition_s(context: BenchContext, config) -> float:
     before = catalog.load("02_01").frames(80, 201)
     after = catalog.load("02_03").frames(20, 140)
     clock = time.perf_counter()
-    transition("performed", before, after, 20, 0.5, PerformedKeys("linear", config=config))
+    keys = PerformedKeys(get_method("linear"), config=config)
+    transition("performed", before, after, 20, 0.5, keys)
     return time.perf_counter() - clock

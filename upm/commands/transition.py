@@ -238,7 +238,7 @@ def run(args) -> int:
                    "out": str(args.out), "out_frames": result.motion.n_frames,
                    "asf": str(catalog.info(source_ref.name).asf_path)})
     if args.method == "performed":
-        report["follow"] = key_source.follow
+        report["follow"] = key_source.follow.name
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     if args.plot:
@@ -256,7 +256,7 @@ def run(args) -> int:
           f"frames {w.start}-{w.stop - 1} (0-based; AMC frame numbers {w.start + 1}-{w.stop})")
     print(f"transition computed in {1e3 * result.seconds:.2f} ms")
     if args.method == "performed":
-        print(performed_line(result.diagnostics, key_source.follow))
+        print(performed_line(result.diagnostics, key_source.follow.name))
     return 0
 
 

@@ -77,14 +77,16 @@ class PerformedKeys:
 
     Attributes
     ----------
-    follow : str
+    follow : TransitionMethod
+        The followed method (``upm.transitions.get_method("feasible")``).
     source : KeyPostureSource or None
+        Its key source.
     config : object or None
     context_s : float or None
         Context before and after the window, s (None: the configuration's).
     """
 
-    follow: str
+    follow: TransitionMethod
     source: object | None = None
     config: object | None = None
     context_s: float | None = None
@@ -98,34 +100,31 @@ class PerformedKeys:
         return a + alpha * (b - a)
 
 
-def performed_key_source(context) -> PerformedKeys:
+def key_source_of(context, get_method: Callable, build_key_source: Callable) -> PerformedKeys:
     """The key source of ``performed`` from a :class:`upm.transitions.registry.KeySourceContext`
-    (its ``follow`` and ``performer_config``)."""
-    from upm.transitions.registry import build_key_source, get_method
-
+    (its ``follow`` and ``performer_config``), with the registry's ``get_method`` and
+    ``build_key_source`` (the registry passes them: this module does not import it)."""
     follow = context.follow or DEFAULT_FOLLOW
     if follow == "performed":
         raise UsageError("--follow performed: follow another method (e.g. feasible, linear)")
     spec = get_method(follow)
     source = build_key_source(spec, context)
     context.method = "performed"
-    return PerformedKeys(follow=follow, source=source, config=context.performer_config)
+    return PerformedKeys(follow=spec, source=source, config=context.performer_config)
 
 
 def _keys(key_source) -> PerformedKeys:
     if not isinstance(key_source, PerformedKeys):
         raise UsageError("method 'performed' needs its key source "
-                         "(upm.transitions.build_key_source('performed', context))")
+                         "(upm.transitions.build_key_source('performed', context), or "
+                         "upm.transitions.performed.PerformedKeys)")
     return key_source
 
 
 def solve(problem: WindowProblem) -> WindowResult:
     """The followed method's window (what the humanoid is asked to perform)."""
-    from upm.transitions.registry import get_method
-
     keys = _keys(problem.key_source)
-    spec = get_method(keys.follow)
-    return spec.solve(dataclasses.replace(problem, key_source=keys.source))
+    return keys.follow.solve(dataclasses.replace(problem, key_source=keys.source))
 
 
 def finish(result: Transition, key_source) -> Transition:
@@ -156,12 +155,13 @@ def finish(result: Transition, key_source) -> Transition:
                                seconds=result.seconds + seconds, diagnostics=diagnostics)
 
 
+#: The method; the registry registers it with its key-source builder
+#: (``upm.transitions.registry``: :func:`key_source_of` with the registry's functions).
 METHOD = TransitionMethod(
     name="performed", solve=solve, finish=finish, continuity="C0", key_kind="performed",
     summary="the window as the free-root humanoid performed it while following another "
             "method's (feasible by default, --follow), found by the offline effort's search "
             "(about a minute per window)",
-    key_source=performed_key_source,
     key_help="the followed method's key source and the humanoid's performer "
              "(upm.transitions.build_key_source('performed', context))",
     role="performed", needs_map=False,

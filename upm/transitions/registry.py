@@ -15,7 +15,7 @@ This module imports the method modules and nothing that imports it back
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -31,10 +31,17 @@ from upm.transitions import (
 )
 from upm.transitions.base import KeyPostureSource, TransitionMethod
 
+
+def _performed_key_source(context):
+    """``performed``'s key source: the followed method's, built by this registry."""
+    return performed.key_source_of(context, get_method, build_key_source)
+
+
 #: The methods the project ships, in table order.
 _BUILT_IN: tuple[TransitionMethod, ...] = (
     keyposture.UPM, keyposture.SOM, keyposture.CLASSNN, keyposture.SNAP, linear.METHOD,
-    slerp.METHOD, inertialize.METHOD, spacetime.METHOD, feasible.METHOD, performed.METHOD,
+    slerp.METHOD, inertialize.METHOD, spacetime.METHOD, feasible.METHOD,
+    replace(performed.METHOD, key_source=_performed_key_source),
 )
 
 #: Every transition method, by name (registration order).
