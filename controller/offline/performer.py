@@ -49,16 +49,16 @@ def perform_transition(transition, context_s: float | None = None, config=None):
     Returns
     -------
     upm.transitions.performed.PerformedWindow
-        The window's joint angles and root, and ``figures``: ``joint_error_deg`` (RMS
+        The joint angles and root of the whole run (from ``first``, the context before
+        the window, to the context after it), and ``figures``: ``joint_error_deg`` (RMS
         over the window's frames and hinges, against the asked window), ``body_error_mm``
         (mean), ``fell`` (1/0: anywhere in the run), ``fell_in_window``, ``left_window``
         (1: fell before the window's end, or the search's chosen path was in trouble in a
         segment that overlaps the window), ``torque_saturation_share`` (the window's
-        frames), ``root_drift_m`` (at the window's end), ``join_step_a_deg`` and
-        ``join_step_b_deg`` (RMS over the DOFs of the step from A to the first window frame
-        and from the last to B), ``rollouts``, ``wall_s``, ``path_shift_m`` (the horizontal
-        shift that joins the performed path to A's: the run starts before A and drifts; on
-        the flat floor the shifted motion is as physical).
+        frames), ``root_drift_m`` (at the window's end), ``join_step_start_deg`` and
+        ``join_step_end_deg`` (RMS over the DOFs of the step from the clip into the run, at
+        its start from the clip's own state, and from the run's end back to the clip),
+        ``context_before_s``, ``context_after_s``, ``rollouts``, ``wall_s``.
     """
     from controller.offline import perform
     from controller.offline.samcon import segment_bounds
@@ -79,22 +79,13 @@ def perform_transition(transition, context_s: float | None = None, config=None):
     asked = to_qpos(model, motion)
     result = perform(model, asked[a:b], fps, config)
     inside = slice(w0 - a, w1 - a)
-    qpos = result.qpos[inside]
+    qpos = result.qpos
     finite = np.all(np.isfinite(qpos), axis=1)
-    qpos = np.where(finite[:, None], qpos, asked[w0:w1])  # a diverged run: the asked frames
+    qpos = np.where(finite[:, None], qpos, asked[a:b])  # a diverged run: the asked frames
     done = from_qpos(model, qpos, motion.skeleton, fps)
     root = done.root.copy()
-    # The floor is flat: the same motion moved along it is as physical. Moved so that the
-    # body's path joins A's (the run started before A and drifted): the horizontal shift
-    # that puts its pelvis at A where A's is.
-    at_a = w0 - 1 - a
-    shift = np.zeros(2)
-    if at_a >= 0 and np.all(np.isfinite(result.qpos[at_a])):
-        performed_a = from_qpos(model, result.qpos[at_a][None], motion.skeleton, fps).root[0]
-        shift = motion.root[w0 - 1, [0, 2]] - performed_a[[0, 2]]
-    root[:, [0, 2]] += shift
-    previous = motion.root[w0 - 1, 3:] if w0 > 0 else root[0, 3:]
-    for t in range(root.shape[0]):  # the root's angles continue from A's, as join's do
+    previous = motion.root[a - 1, 3:] if a > 0 else root[0, 3:]
+    for t in range(root.shape[0]):  # the root's angles continue from the clip's
         root[t, 3:] = previous + angle_diff_deg(root[t, 3:], previous)
         previous = root[t, 3:]
     posture = done.posture_deg
@@ -117,12 +108,12 @@ def perform_transition(transition, context_s: float | None = None, config=None):
         "left_window": float(fell_in_window or trouble),
         "torque_saturation_share": float("nan") if share is None else share,
         "root_drift_m": float(result.root_drift_m[inside][-1]),
-        "join_step_a_deg": (step(posture[0], motion.posture_deg[w0 - 1]) if w0 > 0
-                            else 0.0),
-        "join_step_b_deg": (step(posture[-1], motion.posture_deg[w1]) if w1 < n else 0.0),
+        "join_step_start_deg": step(posture[0], motion.posture_deg[a - 1]) if a > 0 else 0.0,
+        "join_step_end_deg": step(posture[-1], motion.posture_deg[b]) if b < n else 0.0,
+        "context_before_s": (w0 - a) / fps,
+        "context_after_s": (b - w1) / fps,
         "rollouts": float(result.samples),
         "wall_s": float(result.wall_s),
         "diverged_frames": float(np.count_nonzero(~finite)),
-        "path_shift_m": float(np.linalg.norm(shift)),
     }
-    return PerformedWindow(posture_deg=posture, root=root, figures=figures)
+    return PerformedWindow(posture_deg=posture, root=root, figures=figures, first=a)

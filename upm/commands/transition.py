@@ -266,8 +266,10 @@ def performed_line(diagnostics, follow: str) -> str:
     line = (f"performed (following {follow}): joint error {d['performed_joint_error_deg']:.1f} "
             f"deg RMS, body error {d['performed_body_error_mm']:.0f} mm mean against the "
             f"asked window; torque at its limit {100 * d['performed_torque_saturation_share']:.1f}"
-            f" % of the time; join steps {d['performed_join_step_a_deg']:.1f} / "
-            f"{d['performed_join_step_b_deg']:.1f} deg")
+            f" % of the time; joins {d['performed_join_step_start_deg']:.1f} deg into the run "
+            f"({d['performed_context_before_s']:.2f} s before the window), "
+            f"{d['performed_join_step_end_deg']:.1f} deg out of it "
+            f"({d['performed_context_after_s']:.2f} s after)")
     if d["performed_fell"]:
         line += ("; the body FELL" + (" in the window" if d["performed_fell_in_window"]
                                       else " after the window")

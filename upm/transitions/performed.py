@@ -6,10 +6,15 @@ floor and no force on it but the floor's, follows the transition from the clip's
 state a little before the window to a little after it (the configuration's
 ``window_runs``: 0.5 s each side, as the controller's other window runs), in the offline
 effort (a sampling search over its servos' targets, :mod:`controller.offline`); what it
-did in the window's frames — joints and root, contacts included — converted back to the
-subject's joint angles, is the window, moved along the floor so that its path joins A's
-(the run starts before A and drifts; on a flat floor the moved motion is as physical), and
-clip 2 is moved along the floor to continue where the body ended.
+did — joints and root, contacts included — converted back to the subject's joint angles,
+replaces the window *and the context around it*: the run starts from the clip's own state,
+so it joins clip 1 where it starts, and the one join left is where it ends, 0.5 s into
+clip 2, which is turned about the vertical and moved along the floor (as physical on a
+flat floor) to continue where and as the body ended. (The window's frames alone would
+join the clips with a step: after 0.5 s of following, the body's pelvis is tilted a few
+degrees from the clip's, and on 02_01@200 -> 02_03@20 that step made the study's jerk,
+foot skating and residual force of the window those of a jump.) The figures report both
+joins' steps.
 
 Where the body cannot perform the asked window (it falls, or the search was in trouble
 in the window), that is a finding, reported in the transition's diagnostics
@@ -45,18 +50,23 @@ class PerformedWindow:
 
     Attributes
     ----------
-    posture_deg : ndarray, shape (L, 63)
-        The performed window's joint angles, degrees.
-    root : ndarray, shape (L, 6)
-        Its root: tx, ty, tz metres, rx, ry, rz degrees (the skeleton's root order).
+    posture_deg : ndarray, shape (M, 63)
+        The performed frames' joint angles, degrees: the window and the context the body
+        performed around it.
+    root : ndarray, shape (M, 6)
+        Their root: tx, ty, tz metres, rx, ry, rz degrees (the skeleton's root order).
     figures : dict of str to float
         How it went (joint and body error against the asked window, fall, trouble,
         torque saturation, cost): the transition's diagnostics, prefixed ``performed_``.
+    first : int
+        The transition motion's frame of the first performed frame (the run starts there
+        from the clip's own state).
     """
 
     posture_deg: np.ndarray
     root: np.ndarray
     figures: dict
+    first: int
 
 
 def install_performer(performer: Callable | None) -> None:
@@ -128,7 +138,8 @@ def solve(problem: WindowProblem) -> WindowResult:
 
 
 def finish(result: Transition, key_source) -> Transition:
-    """The transition with its window replaced by what the humanoid performed."""
+    """The transition with its window and the context around it replaced by what the
+    humanoid performed (:class:`PerformedWindow`)."""
     import time
 
     keys = _keys(key_source)
@@ -141,18 +152,53 @@ def finish(result: Transition, key_source) -> Transition:
     done = performer(result, keys.context_s, keys.config)
     seconds = time.perf_counter() - start
     window = result.window
+    order = result.motion.skeleton.root_axis_order
     posture = np.array(result.motion.posture_deg, dtype=float)
     root = np.array(result.motion.root, dtype=float)
-    asked_end = root[window.stop - 1, [0, 2]].copy()
-    posture[window] = done.posture_deg
-    root[window] = done.root
-    # clip 2 continues where the body ended (moved along the floor: ASF x and z)
-    root[window.stop:, [0, 2]] += root[window.stop - 1, [0, 2]] - asked_end
+    first = int(done.first)
+    stop = first + done.posture_deg.shape[0]
+    if not (0 <= first <= window.start and window.stop <= stop <= root.shape[0]):
+        raise ValueError(f"the performer returned frames {first}:{stop}, which do not cover "
+                         f"the window {window.start}:{window.stop}")
+    asked_end = root[stop - 1].copy()
+    posture[first:stop] = done.posture_deg
+    root[first:stop] = done.root
+    if stop < root.shape[0]:  # the clip continues where and as the body ended
+        end = root[stop - 1]
+        root[stop:] = turned(root[stop:], order, _heading_turn(asked_end, end, order),
+                             asked_end, end)
     motion = result.motion.replace(posture_deg=posture, root=root)
     diagnostics = dict(result.diagnostics)
     diagnostics.update({f"performed_{k}": float(v) for k, v in done.figures.items()})
     return dataclasses.replace(result, motion=motion, method="performed",
                                seconds=result.seconds + seconds, diagnostics=diagnostics)
+
+
+def _heading_turn(source, target, order: str) -> float:
+    """The turn about the vertical, degrees, from root ``source``'s heading to
+    ``target``'s (roots (6,): tx, ty, tz m, rx, ry, rz deg)."""
+    from upm.ops.angles import angle_diff_deg
+    from upm.ops.rotations import euler_to_matrix
+    from upm.transitions.root import heading_deg
+
+    return float(angle_diff_deg(heading_deg(euler_to_matrix(target[3:], order)),
+                                heading_deg(euler_to_matrix(source[3:], order))))
+
+
+def turned(root, order: str, turn_deg: float, pivot, to) -> np.ndarray:
+    """Roots (T, 6) turned by ``turn_deg`` about the vertical (ASF y) through ``pivot``'s
+    position and moved so that ``pivot``'s lands on ``to``'s, horizontally (heights kept);
+    angles continuous from the first frame's."""
+    from upm.ops.rotations import axis_rotation, continuous_euler_deg, euler_to_matrix
+
+    root = np.asarray(root, dtype=float)
+    turn = axis_rotation(turn_deg, "Y")
+    out = root.copy()
+    offset = root[:, :3] - np.array([pivot[0], 0.0, pivot[2]])
+    out[:, :3] = offset @ turn.T + np.array([to[0], 0.0, to[2]])
+    matrices = turn @ euler_to_matrix(root[:, 3:], order)
+    out[:, 3:] = continuous_euler_deg(matrices, order, root[0, 3:])
+    return out
 
 
 #: The method; the registry registers it with its key-source builder
