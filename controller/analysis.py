@@ -13,10 +13,14 @@ from controller.config import DEFAULT, ControllerConfig
 
 #: Free-root controllers: the balance controller, or the position servos alone.
 CONTROLLERS = ("balance", "servo")
+#: Efforts of the free-root runs: the real-time controller (``controller``), or the offline
+#: search over the servos' targets (:mod:`controller.offline`).
+EFFORTS = ("realtime", "offline")
 
 
 def settings(tracking_modes=(), controller: str = "balance", processes: int = 1,
-             strength: float = 1.0, config: ControllerConfig = DEFAULT) -> dict:
+             strength: float = 1.0, config: ControllerConfig = DEFAULT,
+             effort: str = "realtime") -> dict:
     """The thresholds and methods of the checks, JSON-ready (units in the names), and
     the whole configuration (``controller_config``: :meth:`ControllerConfig.as_dict`, which
     :meth:`ControllerConfig.from_dict` reads back). ``strength``: the multiple of the
@@ -65,7 +69,16 @@ def settings(tracking_modes=(), controller: str = "balance", processes: int = 1,
             "processes": processes if controller == "balance" else None,
             "window_free_lead_s": config.window_runs.lead_s,
             "window_free_tail_s": config.window_runs.tail_s,
+            "effort": effort,
         }
+        if effort == "offline":
+            out["tracking"]["free_controller"] = "offline"
+            out["tracking"]["free_controller_method"] = (
+                "position servos, their targets corrected by a sampling search over "
+                "segments (SAMCON-style: the best states kept, backtracking where all are "
+                "in trouble), no root force; controller.offline")
+            out["tracking"]["search_budget"] = config.offline.budget
+            out["tracking"]["processes"] = None
     out["controller_config"] = config.as_dict()
     return out
 
@@ -90,13 +103,23 @@ def motion_description(model, motion, model_path=None) -> dict:
 
 
 def free_run(model, qpos, fps: float, controller: str = "balance", progress: bool = False,
-             processes: int = 1, config: ControllerConfig = DEFAULT):
+             processes: int = 1, config: ControllerConfig = DEFAULT,
+             effort: str = "realtime"):
     """A free-root simulation of a reference ``qpos`` (T, nq) by ``controller`` with
     ``config``: a :class:`controller.balance.report.BalanceTracking` or a
     :class:`controller.tracking.Tracking`. ``processes``: the balance controller's (1 or
-    2, see :func:`controller.balance.follow`)."""
+    2, see :func:`controller.balance.follow`). ``effort="offline"``: the offline search
+    instead (:func:`controller.offline.perform`, a
+    :class:`controller.offline.OfflineResult`; ``controller`` unused)."""
     from controller.balance.report import balance_tracking
     from controller.tracking.servo import track_qpos
+
+    if effort not in EFFORTS:
+        raise ValueError(f"unknown effort {effort!r} (efforts: {', '.join(EFFORTS)})")
+    if effort == "offline":
+        from controller.offline import perform
+
+        return perform(model, qpos, fps, config, progress)
 
     if controller not in CONTROLLERS:
         raise ValueError(f"unknown controller {controller!r} (controllers: "
@@ -109,7 +132,8 @@ def free_run(model, qpos, fps: float, controller: str = "balance", progress: boo
 
 def window_free_runs(model, motion, windows, controller: str = "balance",
                      progress: bool = False, processes: int = 1,
-                     config: ControllerConfig = DEFAULT) -> list[dict]:
+                     config: ControllerConfig = DEFAULT, effort: str = "realtime"
+                     ) -> list[dict]:
     """Per window, a free-root simulation from the reference state
     ``config.window_runs.lead_s`` before the window to ``tail_s`` after it: does the
     character get through it standing?
@@ -133,13 +157,15 @@ def window_free_runs(model, motion, windows, controller: str = "balance",
         a = max(0, w0 - round(lead_s * motion.fps))
         b = min(n, w1 + round(tail_s * motion.fps))
         run = free_run(model, qpos[a:b], motion.fps, controller, processes=processes,
-                       config=config)
+                       config=config, effort=effort)
         inside = slice(w0 - a, w1 - a)
-        fall_frame = run.run.fall_frame if controller == "balance" else run.fall_frame
+        balance = controller == "balance" and effort == "realtime"
+        fall_frame = run.run.fall_frame if balance else run.fall_frame
         fall = None if fall_frame is None else a + fall_frame
         summary = run.summary(inside)
         entry = {
-            "start": a, "stop": b, "controller": controller, "fell": fall is not None,
+            "start": a, "stop": b, "fell": fall is not None,
+            "controller": controller if effort == "realtime" else "offline",
             "fall_frame": fall, "fall_in_window": fall is not None and fall < w1,
             "diverged_frame": None if run.diverged_frame is None else a + run.diverged_frame,
             "warnings": run.warnings,
@@ -152,7 +178,8 @@ def window_free_runs(model, motion, windows, controller: str = "balance",
 def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None, limits=None,
             pieces=None, dynamics: bool = True, tracking_modes=(), window_free: bool = False,
             model_path=None, controller: str = "balance", progress: bool = False,
-            processes: int = 1, strength: float = 1.0, config: ControllerConfig = DEFAULT):
+            processes: int = 1, strength: float = 1.0, config: ControllerConfig = DEFAULT,
+            effort: str = "realtime"):
     """Run the checks on a motion and build its report.
 
     Parameters
@@ -188,6 +215,9 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
     config : controller.config.ControllerConfig
         The tuning constants of the residual check and the simulations (recorded in the
         report's settings as ``controller_config``).
+    effort : str
+        The free-root runs' effort (:data:`EFFORTS`): ``"realtime"`` (``controller``) or
+        ``"offline"`` (:mod:`controller.offline`); recorded as the report's ``effort``.
 
     Returns
     -------
@@ -209,16 +239,18 @@ def analyse(model, motion, *, kind: str = "check", windows=(), window_meta=None,
                               check.support_distance_m, check.friction, check.lowpass_hz)
                 if dynamics else None)
     tracking = {mode: (free_run(model, to_qpos(model, motion), motion.fps, controller,
-                                progress, processes, config)
+                                progress, processes, config, effort)
                        if mode == "free" else track(model, motion, mode, config=config))
                 for mode in tracking_modes}
     per_window = (window_free_runs(model, motion, windows, controller=controller,
-                                   progress=progress, processes=processes, config=config)
+                                   progress=progress, processes=processes, config=config,
+                                   effort=effort)
                   if window_free and windows else None)
     report = build_report(kind, validity, motion=motion_description(model, motion, model_path),
                           settings=settings(tuple(tracking_modes), controller, processes,
-                                            strength, config),
+                                            strength, config, effort),
                           residual=residual,
                           tracking=tracking, window_meta=window_meta,
                           window_tracking=per_window, pieces=pieces)
+    report["effort"] = effort
     return report, {"validity": validity, "residual": residual, "tracking": tracking}

@@ -3,6 +3,8 @@ records, the timings, the real windows and the test clips (:func:`collect`)."""
 
 from __future__ import annotations
 
+import math
+
 from eval.inbetween import INBETWEEN, INBETWEEN_METRICS
 from eval.metrics import METRICS, pose_distance_rms_deg
 from eval.records import REAL, Records
@@ -70,7 +72,9 @@ def collect(data, pairs: list, real: dict, done: list) -> dict:
         else:
             records.add(REAL, outcome["index"], outcome["frames"], REAL, outcome["scores"])
     by_pair = {r["index"]: r for kind, r in done if kind == "pair"}
-    timing = {frames: {m: [by_pair[p.index]["ms"][frames][m] for p in pairs]
+    # a method not scored on a pair (performed past performed_pairs) has no time there
+    timing = {frames: {m: [ms for p in pairs
+                           if math.isfinite(ms := by_pair[p.index]["ms"][frames][m])]
                        for m in config.methods} for frames in config.windows}
     real_records = {frames: [{"id": w.index, "clip": w.clip, "start": w.start, "stop": w.stop,
                               "flat_floor": clips[w.clip]["flat_floor"]} for w in ws]

@@ -120,7 +120,7 @@ class Unit:
         return f"{what}, {self.method}, L = {self.window}"
 
 
-def task_list(pairs, real_windows: dict, methods, windows) -> list[Unit]:
+def task_list(pairs, real_windows: dict, methods, windows, scores=None) -> list[Unit]:
     """Every unit of the free-root test, in a fixed order.
 
     Parameters
@@ -129,9 +129,13 @@ def task_list(pairs, real_windows: dict, methods, windows) -> list[Unit]:
     real_windows : dict of int to list of eval.pairs.RealWindow
     methods : sequence of str
     windows : sequence of int
+    scores : callable, optional
+        ``scores(method, pair_index)``: whether a method is run on a pair
+        (:meth:`eval.study.StudyConfig.scores`: ``performed`` on its first pairs only);
+        default: every one.
     """
     units = [Unit("pair", p.index, frames, m) for frames in windows for p in pairs
-             for m in methods]
+             for m in methods if scores is None or scores(m, p.index)]
     units += [Unit("real", w.index, frames, REAL) for frames in windows
               for w in real_windows[frames]]
     return units
@@ -218,11 +222,16 @@ def run_unit(unit: Unit) -> dict[str, float]:
     return simulate_unit(model, motion, start, stop, _WORKER["controller_config"])
 
 
-def records_of(units: list[Unit], done: dict[str, dict[str, float]]) -> Records:
-    """The long-form table of finished units."""
+def records_of(units: list[Unit], done: dict[str, dict[str, float]],
+               skipped: list[Unit] = ()) -> Records:
+    """The long-form table of finished units, and NaN rows for the ``skipped`` ones (a
+    method not run on a pair: the summaries leave them out)."""
     records = Records(PHYSICS_METRICS)
     for unit in units:
         records.add(unit.kind, unit.index, unit.window, unit.method, done[unit.key])
+    for unit in skipped:
+        records.add(unit.kind, unit.index, unit.window, unit.method,
+                    {name: math.nan for name in PHYSICS_METRICS})
     return records
 
 
@@ -341,7 +350,11 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     real_windows = {frames: draw_real_windows(data.lengths, n_pairs, frames, config.seed,
                                               context=context)
                     for frames in config.windows}
-    units = task_list(list(pairs.values()), real_windows, config.methods, config.windows)
+    units = task_list(list(pairs.values()), real_windows, config.methods, config.windows,
+                      config.scores)
+    every = task_list(list(pairs.values()), real_windows, config.methods, config.windows)
+    kept = {u.key for u in units}
+    skipped = [u for u in every if u.key not in kept]
     settings = {"data": Path(config.data_dir).name, "seed": config.seed, "context_s": CONTEXT_S,
                 "alpha": config.as_dict()["alpha"],
                 "controller_config": controller_config.as_dict()}
@@ -366,7 +379,7 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
             f"{len(failures)} of {len(units)} free-root runs failed (first: "
             f"{first.describe()}: {error}); the {len(checkpoint.done)} finished are kept in "
             f"{checkpoint.path}: run the same command again to complete the rest")
-    records = records_of(units, checkpoint.done)
+    records = records_of(units, checkpoint.done, skipped)
     statistics = physics_statistics(records, result.pairs[:n_pairs], real_windows,
                                     result.clips, config.methods, config.windows, config.seed)
     return PhysicsResult(records=records, statistics=statistics, pairs=n_pairs,

@@ -12,7 +12,8 @@ from upm.transitions.registry import get_method
 
 #: Bar colours by a method's role (:data:`upm.transitions.base.ROLES`); grey: real windows.
 ROLE_COLOURS = {"real": "#7f8c8d", "paper": "#c0392b", "recommended": "#27ae60",
-                "paper-comparison": "#2c3e50", "baseline": "#2c3e50", "ablation": "#95a5a6"}
+                "paper-comparison": "#2c3e50", "baseline": "#2c3e50", "ablation": "#95a5a6",
+                "performed": "#8e44ad"}
 
 if TYPE_CHECKING:
     from eval.summaries import Summaries

@@ -13,10 +13,13 @@ method, metric, value; :func:`eval.collect.collect`) with the registry
 number of workers: each task is a pure function of its pair, and the table sorts its rows.
 BLAS runs single-threaded in every process (the arrays are small; with several threads
 the spacetime optimisation ran up to 30x slower on a loaded machine).
+
+The study's settings are :class:`eval.study_config.StudyConfig` (re-exported here).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -31,49 +34,11 @@ from eval.pairs import (
 )
 from eval.records import Records
 from eval.runs import default_workers, single_threaded_blas
-from upm.transitions import METHODS
+from eval.study_config import ALPHA, FULL_METHODS, STUDY_METHODS, StudyConfig
+from upm.transitions import PERFORMED_METHODS
 
-#: Transition methods of the study, in table order: every registered method.
-STUDY_METHODS = tuple(METHODS)
-#: The key-posture ratio (the paper's: the key posture at the window's middle).
-ALPHA = 0.5
-
-
-@dataclass(frozen=True)
-class StudyConfig:
-    """What decides the study's numbers.
-
-    Attributes
-    ----------
-    data_dir : str
-        The CMU clips (``clips.csv`` gives the train/test split).
-    pairs : int
-        Transition pairs (and real windows per window length).
-    windows : tuple of int
-        Window lengths L, frames at 120 fps.
-    seed : int
-    methods : tuple of str
-    inbetween : int or None
-        Windows of the in-betweening task (:mod:`eval.inbetween`): None for as many as
-        pairs, 0 for none.
-    """
-
-    data_dir: str
-    pairs: int = 40
-    windows: tuple[int, ...] = (20,)
-    seed: int = 0
-    methods: tuple[str, ...] = STUDY_METHODS
-    inbetween: int | None = None
-
-    @property
-    def inbetween_windows(self) -> int:
-        return self.pairs if self.inbetween is None else self.inbetween
-
-    def as_dict(self) -> dict:
-        return {"pairs": self.pairs, "windows": list(self.windows), "seed": self.seed,
-                "methods": list(self.methods), "alpha": ALPHA,
-                "inbetween_windows": self.inbetween_windows}
-
+__all__ = ["ALPHA", "FULL_METHODS", "STUDY_METHODS", "StudyConfig", "StudyData",
+           "StudyResult", "make_transition", "pair_by_id", "prepare", "run_study"]
 
 @dataclass
 class StudyData:
@@ -130,6 +95,10 @@ def key_sources(catalog, methods, progress: bool = False) -> dict:
     from upm.transitions import KeySourceContext, build_key_source
 
     context = KeySourceContext(catalog=catalog, train_maps=True, progress=progress)
+    if any(m in PERFORMED_METHODS for m in methods):
+        from controller.offline.performer import install
+
+        install()  # the humanoid's performer, in this process and (forked) its workers
     built = {m: build_key_source(m, context) for m in methods}
     return {m: s for m, s in built.items() if s is not None}
 
@@ -163,7 +132,7 @@ def _warm_up(data: StudyData) -> None:
 
     first, second = list(data.lengths)[:2]
     pair = Pair(index=-1, first=Segment(first, 0, 10), second=Segment(second, 0, 10))
-    for method in data.config.methods:
+    for method in data.config.kinematic_methods:
         make_transition(data, pair, method, 4)
 
 
@@ -186,6 +155,7 @@ def score_pair(data: StudyData, pair: Pair) -> dict:
         {method: milliseconds of the transition itself}}``; ``end_self_collision``:
         whether A and B (clip 2's first posture on clip 1's body) are in self-collision.
     """
+    from eval.metrics import METRICS
     from eval.scoring import end_self_collision, score_window
 
     scores: list = []
@@ -195,6 +165,10 @@ def score_pair(data: StudyData, pair: Pair) -> dict:
         zones = exclusion_zones(pair, frames, data.lengths)
         ms[frames] = {}
         for method in data.config.methods:
+            if not data.config.scores(method, pair.index):
+                scores.append((frames, method, {m: math.nan for m in METRICS}))
+                ms[frames][method] = math.nan
+                continue
             t = make_transition(data, pair, method, frames)
             model = data.model(pair.first.clip)
             scores.append((frames, method,
@@ -233,7 +207,7 @@ def _task(kind: str, item):
         from eval.inbetween import score_window
 
         return kind, {"index": item.index, "scores": score_window(
-            _DATA, item, _DATA.position_std, _DATA.config.methods, ALPHA)}
+            _DATA, item, _DATA.position_std, _DATA.config.kinematic_methods, ALPHA)}
     return kind, (score_pair(_DATA, item) if kind == "pair" else score_real(_DATA, item))
 
 

@@ -49,7 +49,7 @@ def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
     expected = {("posture_map", "upm_train_s"), ("posture_map", "key_posture_us_single"),
                 ("posture_map", "key_posture_us_batched"), ("transitions", "upm"),
                 ("transitions", "linear"), ("studio", "slider_to_scene_ms"),
-                ("render", "wall_s_per_simulated_s")}
+                ("render", "wall_s_per_simulated_s"), ("offline", "wall_s_per_sim_s")}
     found = {(bench, name) for bench, figures in report["benchmarks"].items()
              for name in figures.get("targets", {})}
     assert expected <= found
@@ -64,6 +64,9 @@ def test_bench_quick_writes_json(tmp_path, data_dir, capsys):
         assert entry["unit"] == "ratio"
         assert entry["value"] == methods[name]["ratio_to_reference"]
         assert entry["us_per_transition"] == methods[name]["us_per_transition"]
+    offline = report["benchmarks"]["offline"]  # issue 61's offline effort, quick: 24 samples
+    assert offline["rollouts"] >= offline["samples"] and offline["ratio_to_mj_step"] > 0
+    assert offline["targets"]["wall_s_per_sim_s"]["value"] == offline["wall_s_per_sim_s"]
     render = report["benchmarks"]["render"]
     assert (render["targets"]["wall_s_per_simulated_s"]["value"]
             == render["wall_s_per_simulated_s"] > 0)

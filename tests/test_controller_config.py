@@ -195,3 +195,34 @@ def test_a_run_made_again_from_its_report_is_the_same_run(data_dir, catalog, tmp
     assert default.ctrl.shape != again.ctrl.shape or not np.array_equal(default.ctrl,
                                                                          again.ctrl)
     assert math.isfinite(free["error_deg_rms"])
+
+
+def test_the_offline_section_round_trips_and_is_checked(tmp_path):
+    path = tmp_path / "offline.toml"
+    path.write_text("[offline]\nsamples = 60\nsigma_deg = 4\n\n[offline.weights]\n"
+                    "balance = 10\n")
+    config = load_config(path)
+    assert config.offline.samples == 60 and config.offline.sigma_deg == 4.0
+    assert config.offline.weights.balance == 10.0
+    assert config.offline.weights.pose == DEFAULT.offline.weights.pose
+    assert ControllerConfig.from_dict(json.loads(json.dumps(config.as_dict()))) == config
+    assert config.with_threads(1).offline.threads == 1 and config.with_threads(None) == config
+    for text, words in (("[offline]\ncoherence = 1.5\n", "offline.coherence must be"),
+                        ("[offline]\nsamples = 4\nkeep = 8\n", "offline.keep (8)"),
+                        ("[offline]\nsamples = 2.5\n", "offline.samples must be a whole"),
+                        ("[offline.weights]\nposes = 1\n", "unknown key 'offline.weights.poses'"),
+                        ("[offline]\nbudget = 0.5\n", "offline.budget must be at least 1")):
+        path.write_text(text)
+        with pytest.raises(ConfigError) as info:
+            load_config(path)
+        assert words in str(info.value) and "\n" not in str(info.value)
+        assert str(info.value).startswith(str(path))
+
+
+def test_threads_goes_with_the_offline_effort_only(capsys):
+    assert main(["simulate", "--sequence", "02_01", "--report", "x.json",
+                 "--threads", "2"]) == 2
+    assert "--threads is the offline effort's" in capsys.readouterr().err
+    assert main(["simulate", "--sequence", "02_01", "--report", "x.json",
+                 "--effort", "offline", "--search-budget", "3"]) == 2
+    assert "--search-budget is the real-time controller's" in capsys.readouterr().err

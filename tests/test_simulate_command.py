@@ -73,7 +73,7 @@ def test_errors_are_one_line_exit_2(tmp_path, data_dir, capsys, monkeypatch):
     assert result.returncode == 2
     assert result.stderr.strip() == ("upm simulate: error: no transition method 'nope' "
                                      "(methods: upm, som, classnn, snap, linear, slerp, "
-                                     "inertialize, spacetime, feasible)")
+                                     "inertialize, spacetime, feasible, performed)")
     for args, message in [
         (["--sequence", "99_01", "--method", "linear"], "no clip '99_01'"),
         (["--sequence", "02_01@0:50", "02_02", "--method", "upm"], "needs --map"),

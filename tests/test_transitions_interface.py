@@ -7,18 +7,28 @@ from tests.transition_data import pair, synthetic_pair
 from upm.core.errors import UsageError
 from upm.motion.amc import read_amc, write_amc
 from upm.ops.angles import angle_diff_deg
-from upm.transitions import KEY_POSTURE_METHODS, METHODS, ClassNearest, transition
+from upm.transitions import (
+    KEY_POSTURE_METHODS,
+    KINEMATIC_METHODS,
+    METHODS,
+    PERFORMED_METHODS,
+    ClassNearest,
+    transition,
+)
 
 
 def test_registry():
     assert set(METHODS) == {"upm", "som", "classnn", "snap", "linear", "slerp", "inertialize",
-                            "spacetime", "feasible"}
+                            "spacetime", "feasible", "performed"}
     assert set(KEY_POSTURE_METHODS) == {"upm", "som", "classnn", "snap", "feasible"}
+    # performed's window is what the humanoid did (tests/test_performed.py)
+    assert PERFORMED_METHODS == ("performed",)
+    assert set(KINEMATIC_METHODS) == set(METHODS) - {"performed"}
     for name, method in METHODS.items():
         assert method.name == name and method.summary and method.continuity in ("C0", "C1")
 
 
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", KINEMATIC_METHODS)
 def test_result_layout(synthetic_catalog, synthetic_sources, method):
     before, after = synthetic_pair(synthetic_catalog, 0)  # two subjects, both at 120 fps
     source = synthetic_sources.get(method)
@@ -111,7 +121,7 @@ def test_short_clips_and_short_windows(synthetic_catalog, synthetic_sources):
     """One-frame clips (a held pose) and one-frame windows work for every method that
     can; velocities of a one-frame clip are zero."""
     before, after = synthetic_pair(synthetic_catalog, 0)
-    for method in METHODS:
+    for method in KINEMATIC_METHODS:
         source = synthetic_sources.get(method)
         for frames in (1, 2, 5):
             result = transition(method, before.frames(-1, None), after.frames(0, 1), frames,

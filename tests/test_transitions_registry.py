@@ -159,7 +159,8 @@ def test_register_unregister_round_trip(registered):
 def test_roles_come_from_the_registry():
     """Every method has one of the roles of ``upm.transitions.base.ROLES``; the roles
     partition the registry; one method is recommended, one is the paper's (the UPM's)."""
-    assert ROLES == ("recommended", "paper", "paper-comparison", "baseline", "ablation")
+    assert ROLES == ("recommended", "paper", "paper-comparison", "baseline", "ablation",
+                     "performed")
     by_role = {role: methods_with_role(role) for role in ROLES}
     assert sorted(n for names in by_role.values() for n in names) == sorted(METHODS)
     assert all(by_role[role] == [n for n in METHODS if METHODS[n].role == role]
@@ -167,6 +168,7 @@ def test_roles_come_from_the_registry():
     assert len(by_role["recommended"]) == 1 and len(by_role["paper"]) == 1
     assert METHODS[by_role["paper"][0]].key_kind == "upm"
     assert by_role["baseline"] and by_role["paper-comparison"]
+    assert by_role["performed"] == ["performed"]
     # Whether a method needs --map is a field too, and map_free_methods reads it.
     assert map_free_methods() == [n for n, m in METHODS.items() if not m.needs_map]
     assert {n for n, m in METHODS.items() if m.needs_map} == {"upm", "som", "feasible"}

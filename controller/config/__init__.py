@@ -18,8 +18,8 @@ of the wrong type is a :class:`ConfigError` (a :class:`upm.core.errors.UsageErro
 line naming the file and the key; exit code 2 on the command line).
 
 A new section is one more field of :class:`ControllerConfig` whose type is a frozen
-dataclass with defaults (an ``offline`` section for the offline effort is meant to come
-this way): loading, checking and writing it need nothing more.
+dataclass with defaults (the offline effort's ``offline`` section came this way):
+loading, checking and writing it need nothing more.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from controller.config.convert import ConfigError, from_plain, to_plain
+from controller.config.offline import OfflineConfig, OfflineWeights
 from controller.config.sections import (
     MODES,
     SWING_CONTACTS,
@@ -52,7 +53,8 @@ from controller.config.sections import (
     WindowRunsConfig,
 )
 
-__all__ = ["DEFAULT", "ConfigError", "ControllerConfig", "Mode", "load_config"]
+__all__ = ["DEFAULT", "ConfigError", "ControllerConfig", "Mode", "OfflineConfig",
+           "OfflineWeights", "load_config"]
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,7 @@ class ControllerConfig:
     search, lookahead : the backtracking search over the modes, the gain's lookahead
     falls, window_runs, residual : the fall rule, the free-root runs around a report's
         windows, the inverse-dynamics residual check
+    offline : the offline effort's sampling search (:mod:`controller.offline`)
     """
 
     step: StepConfig = field(default_factory=StepConfig)
@@ -92,6 +95,7 @@ class ControllerConfig:
     falls: FallsConfig = field(default_factory=FallsConfig)
     window_runs: WindowRunsConfig = field(default_factory=WindowRunsConfig)
     residual: ResidualConfig = field(default_factory=ResidualConfig)
+    offline: OfflineConfig = field(default_factory=OfflineConfig)
 
     def __post_init__(self):
         problem = _problem(self)
@@ -132,6 +136,12 @@ class ControllerConfig:
         if budget is None:
             return self
         return self.updated({"search": {"budget": float(budget)}})
+
+    def with_threads(self, threads: int | None) -> ControllerConfig:
+        """This configuration with the offline search's ``threads`` (None: unchanged)."""
+        if threads is None:
+            return self
+        return self.updated({"offline": {"threads": int(threads)}})
 
     @property
     def gains(self) -> tuple[float, ...]:
@@ -193,6 +203,17 @@ _RULES = (
     ("lookahead", "horizon_s", _positive, "above 0"),
     ("falls", "fraction", _share, "above 0 and at most 1"),
     ("falls", "after_fall_s", lambda x: x >= 0, "at least 0"),
+    ("offline", "segment_s", _positive, "above 0"),
+    ("offline", "samples", _positive, "above 0"),
+    ("offline", "keep", _positive, "above 0"),
+    ("offline", "sigma_deg", lambda x: x >= 0, "at least 0"),
+    ("offline", "coherence", lambda x: 0 <= x <= 1, "from 0 to 1"),
+    ("offline", "trouble_cost", _positive, "above 0"),
+    ("offline", "backtracks", lambda x: x >= 0, "at least 0"),
+    ("offline", "fall_cost", lambda x: x >= 0, "at least 0"),
+    ("offline", "budget", lambda x: x >= 1, "at least 1 (one pass)"),
+    ("offline", "threads", lambda x: 1 <= x <= 64, "from 1 to 64"),
+    ("offline", "seed", lambda x: x >= 0, "at least 0"),
 )
 
 
@@ -202,6 +223,13 @@ def _problem(config: ControllerConfig) -> str | None:
         value = getattr(getattr(config, section), key)
         if not test(value):
             return f"{section}.{key} must be {must}, not {value!r}"
+    for key in ("pose", "root", "height", "end", "balance"):
+        if getattr(config.offline.weights, key) < 0:
+            return (f"offline.weights.{key} must be at least 0, not "
+                    f"{getattr(config.offline.weights, key)!r}")
+    if config.offline.keep > config.offline.samples:
+        return (f"offline.keep ({config.offline.keep}) must be at most offline.samples "
+                f"({config.offline.samples})")
     if not config.modes:
         return "modes: give at least one mode (the first is the default)"
     for i, mode in enumerate(config.modes):

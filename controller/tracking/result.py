@@ -66,6 +66,8 @@ class Tracking:
         MuJoCo's warning texts (the first 10 distinct ones).
     config : controller.config.ControllerConfig
         The configuration the simulation was made with (its physics step and fall rule).
+    saturated_actuators : ndarray, shape (T,), or None
+        Share of the actuators at their force limit at each frame (None: not recorded).
     """
 
     mode: str
@@ -94,6 +96,7 @@ class Tracking:
     warnings: dict[str, int]
     messages: tuple[str, ...] = ()
     config: ControllerConfig = DEFAULT
+    saturated_actuators: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -119,6 +122,19 @@ class Tracking:
         if self.fall_frame is not None:
             out[self.fall_frame:] = True
         return out
+
+    def saturation_share(self, part: slice | None = None) -> float | None:
+        """Share of the actuators at their force limit over the frames of ``part`` that
+        were simulated before any fall (None: not recorded or no such frame)."""
+        if self.saturated_actuators is None:
+            return None
+        index = np.arange(self.n_frames)[part if part is not None else slice(None)]
+        if self.diverged_frame is not None:
+            index = index[index < self.diverged_frame]
+        index = index[~self.fallen[index]]
+        if not index.size:
+            return None
+        return float(self.saturated_actuators[index].mean())
 
     @property
     def steps_per_s(self) -> float:

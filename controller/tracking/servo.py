@@ -51,7 +51,7 @@ from controller.tracking.plan import (
 from controller.tracking.result import Tracking
 
 __all__ = ["MODES", "Tracking", "TrackingPlan", "floor_depth", "physics_substeps",
-           "plan_tracking", "servo_lead_s", "track", "track_qpos"]
+           "plan_tracking", "servo_lead_s", "track", "track_plan", "track_qpos"]
 
 
 def track(model, motion, mode: str = "free", lead: bool = True,
@@ -85,13 +85,21 @@ def track(model, motion, mode: str = "free", lead: bool = True,
 def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
                lead: bool = True, config: ControllerConfig = DEFAULT) -> Tracking:
     """:func:`track` on a reference given as ``qpos``, shape (T, nq), at ``fps``."""
+    return track_plan(model, plan_tracking(model, reference_qpos, fps, mode, lead, config),
+                      config)
+
+
+def track_plan(model, plan: TrackingPlan, config: ControllerConfig = DEFAULT) -> Tracking:
+    """The tracking simulation of a :class:`TrackingPlan` (made by :func:`plan_tracking`,
+    or with the servo targets ``plan.ctrl`` changed: the offline search's replay,
+    :mod:`controller.offline`), on ``model`` (the humanoid the plan was made of)."""
     import mujoco
 
     from controller.body import body_figures
     from controller.mjwarnings import fatal
     from controller.qpos import joint_layout
 
-    plan = plan_tracking(model, reference_qpos, fps, mode, lead, config)
+    mode = plan.mode
     sim, ref, substeps = plan.model, plan.reference_qpos, plan.substeps
     ctrl, root_q, root_v = plan.ctrl, plan.root_qpos, plan.root_qvel
     n_frames = ref.shape[0]
@@ -132,7 +140,7 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
     reachable[simulated] = (qpos[simulated][:, hinge_q]
                             - np.clip(wrap_rad(ref[simulated][:, hinge_q]), low, high))
     return Tracking(
-        mode=mode, fps=float(fps), timestep_s=float(sim.opt.timestep), steps=steps,
+        mode=mode, fps=float(plan.fps), timestep_s=float(sim.opt.timestep), steps=steps,
         wall_s=wall, hinge_names=layout.names, qpos=qpos,
         dof_error_deg=np.rad2deg(error), dof_reachable_error_deg=np.rad2deg(reachable),
         limit_rows=record.limit_rows, limit_steps=limit_steps,
@@ -146,6 +154,7 @@ def track_qpos(model, reference_qpos, fps: float, mode: str = "free",
                               config.falls),
         diverged_frame=diverged, warnings=warning_counts(data),
         messages=tuple(dict.fromkeys(messages))[:10], config=config,
+        saturated_actuators=record.saturated,
     )
 
 
@@ -168,6 +177,10 @@ class _FrameRecorder:
         self.torque_peak = np.full(n_frames, np.nan)
         self.pelvis = np.full(n_frames, np.nan)
         self.head = np.full(n_frames, np.nan)
+        self.saturated = np.zeros(n_frames)
+        limited = np.asarray(model.actuator_forcelimited, dtype=bool)
+        self.force_limit = np.where(limited, np.abs(model.actuator_forcerange).max(axis=1),
+                                    np.inf)
         self.joint_frames = np.zeros(model.njnt, dtype=int)
 
     def __call__(self, data, t: int) -> None:
@@ -183,7 +196,10 @@ class _FrameRecorder:
         rows = data.efc_type[:data.nefc] == self.limit_type
         self.limit_rows[t] = int(np.count_nonzero(rows))
         self.joint_frames[data.efc_id[:data.nefc][rows]] += 1
-        self.torque_peak[t] = float(np.abs(data.actuator_force).max(initial=0.0))
+        force = np.abs(data.actuator_force)
+        self.torque_peak[t] = float(force.max(initial=0.0))
+        if force.size:
+            self.saturated[t] = float(np.mean(force >= self.force_limit * (1 - 1e-6)))
         self.pelvis[t] = data.xpos[self.root_body, 2]
         self.head[t] = data.site_xpos[self.head_site, 2]
 

@@ -85,6 +85,74 @@ def controller_config(args, unused=()):
     return config.with_search_budget(getattr(args, "search_budget", None))
 
 
+def add_effort_arguments(parser) -> None:
+    """``--effort realtime|offline`` and ``--threads N``: the free-root runs' effort
+    (:func:`check_effort`)."""
+    parser.add_argument(
+        "--effort", choices=["realtime", "offline"], default="realtime",
+        help="the free-root runs: 'realtime' (default) the real-time controller of "
+             "--controller; 'offline' a sampling search over the servos' targets that asks "
+             "whether the body can perform the motion at all (no root force; the "
+             "configuration's [offline] section; tens of wall s per simulated s)")
+    parser.add_argument(
+        "--threads", metavar="N", type=int, default=None,
+        help="threads of the offline effort's rollouts (default: [offline] threads, 2; "
+             "the results do not depend on it)")
+
+
+def check_effort(args) -> None:
+    """A :class:`upm.core.errors.UsageError` for options that do not go with ``--effort``."""
+    from upm.core.errors import UsageError
+
+    if args.threads is not None and not 1 <= args.threads <= 64:
+        raise UsageError(f"--threads {args.threads}: use a whole number from 1 to 64")
+    if args.effort != "offline":
+        if args.threads is not None:
+            raise UsageError("--threads is the offline effort's: add --effort offline")
+        return
+    for flag, used in (("--search-budget", getattr(args, "search_budget", None) is not None),
+                       ("--control", bool(getattr(args, "control", None))),
+                       ("--controller servo", getattr(args, "controller", None) == "servo")):
+        if used:
+            raise UsageError(f"{flag} is the real-time controller's: drop it with --effort "
+                             "offline (its budget is [offline] budget in --config)")
+
+
+def add_performed_config_argument(parser) -> None:
+    """``--config FILE.toml`` of ``upm transition`` / ``upm sequence``: the ``performed``
+    method's configuration (:func:`performed_setup`)."""
+    parser.add_argument(
+        "--config", metavar="FILE.toml", default=None,
+        help="with --method performed: the humanoid's configuration (its [offline] section "
+             "sets the search), from a TOML file (default: the built-in constants)")
+
+
+def performed_setup(args):
+    """For ``--method performed``: install the humanoid's performer and return its
+    configuration (``--config``'s, else the defaults; ``args.performer_config`` too);
+    for other methods a :class:`upm.core.errors.UsageError` if ``--follow`` or (where the
+    command's ``--config`` is only the performer's) ``--config`` is given; None."""
+    from upm.core.errors import UsageError
+
+    own_config = args.command in ("transition", "sequence")
+    if args.method != "performed":
+        if getattr(args, "follow", None) is not None:
+            raise UsageError("--follow goes with --method performed")
+        if own_config and getattr(args, "config", None) is not None:
+            raise UsageError("--config sets the humanoid of --method performed: it goes "
+                             "with that method")
+        args.performer_config = None
+        return None
+    from controller.offline.performer import install
+
+    install()
+    config = controller_config(args)
+    if not own_config:
+        config = config.with_threads(getattr(args, "threads", None))
+    args.performer_config = config
+    return config
+
+
 def print_json(obj) -> None:
     """Print ``obj`` as indented JSON on stdout."""
     json.dump(obj, sys.stdout, indent=2)

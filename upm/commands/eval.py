@@ -45,10 +45,12 @@ figures (fig13_window_dof.png, fig14_sequence_dof.png, metrics.png, filmstrip.pn
 
 The default is a reduced study (100 pairs, 20-frame windows: about 2 minutes on 2 cores,
 training the maps included); --full runs the whole protocol (200 pairs, windows of 10,
-20 and 40 frames: about 4 minutes). The in-betweening task adds about 40 % to the
-default study (measured on a shared, loaded 2-core machine: 490 s instead of 355 s;
---inbetween 0 skips it). The pairs of a smaller study are the first pairs of a larger
-one with the same seed, scored identically.
+20 and 40 frames: about 4 minutes, and the method performed: the window as the free-root
+humanoid performed feasible's, on the first --performed-pairs pairs, 20 by default, about
+40 s of CPU a window; its rows of the other pairs are empty). The in-betweening task adds
+about 40 % to the default study (measured on a shared, loaded 2-core machine: 490 s
+instead of 355 s; --inbetween 0 skips it). The pairs of a smaller study are the first
+pairs of a larger one with the same seed, scored identically.
 
 The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
 pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
@@ -102,8 +104,12 @@ def configure(parser) -> None:
                         help="windows of the in-betweening task (the LaFAN1 metrics L2Q, "
                              "L2P, NPSS; default: as many as --pairs; 0: skip it)")
     parser.add_argument("--methods", nargs="+", metavar="M", default=None,
-                        help="methods to run (default: all; upm is needed for the paired "
-                             "comparisons and figures)")
+                        help="methods to run (default: all but performed; --full: all; upm "
+                             "is needed for the paired comparisons and figures)")
+    parser.add_argument("--performed-pairs", type=int, metavar="N", default=None,
+                        help="pairs the method performed is scored on: the study's first N "
+                             "(default 20; about 40 s of CPU a window; the others' rows "
+                             "are left empty and out of the summaries)")
     parser.add_argument("--workers", type=int, metavar="K", default=None,
                         help="worker processes (default: the usable cores; 1: no "
                              "subprocesses). The numbers do not depend on it.")
@@ -152,7 +158,7 @@ def run(args) -> int:
 
     from eval.console import headline_text, legend
     from eval.outputs import figure_window, write_outputs
-    from eval.study import STUDY_METHODS, StudyConfig, run_study
+    from eval.study import FULL_METHODS, STUDY_METHODS, StudyConfig, run_study
     from upm.commands.common import controller_config
     from upm.core.errors import UsageError
     from upm.motion.catalog import Catalog
@@ -165,7 +171,8 @@ def run(args) -> int:
     if args.inbetween is not None and args.inbetween < 0:
         raise UsageError(f"--inbetween must be 0 (skip) or more windows, not {args.inbetween}")
     windows = parse_windows(args.windows, FULL_WINDOWS if args.full else DEFAULT_WINDOWS)
-    methods = tuple(args.methods) if args.methods else STUDY_METHODS
+    methods = (tuple(args.methods) if args.methods
+               else FULL_METHODS if args.full else STUDY_METHODS)
     for method in methods:
         get_method(method)  # a one-line error naming the methods if unknown
     if len(set(methods)) != len(methods):
@@ -178,6 +185,12 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
+    performed_pairs = 20 if args.performed_pairs is None else args.performed_pairs
+    if args.performed_pairs is not None and "performed" not in methods:
+        raise UsageError("--performed-pairs goes with the method performed (--full, or "
+                         "--methods ... performed)")
+    if not 1 <= performed_pairs:
+        raise UsageError(f"--performed-pairs must be at least 1, not {performed_pairs}")
     physics_pairs = args.physics_pairs if args.physics_pairs is not None else pairs
     if args.physics_pairs is not None and not args.physics:
         raise UsageError("--physics-pairs goes with --physics")
@@ -194,7 +207,8 @@ def run(args) -> int:
     catalog = Catalog(args.data)
     # absolute: Ray workers open it from their own working directory
     config = StudyConfig(data_dir=str(catalog.root.resolve()), pairs=pairs, windows=windows,
-                         seed=args.seed, methods=methods, inbetween=args.inbetween)
+                         seed=args.seed, methods=methods, inbetween=args.inbetween,
+                         performed_pairs=performed_pairs)
     print(f"upm eval: {pairs} pairs x {len(methods)} methods x windows "
           f"{','.join(map(str, windows))}, seed {args.seed}; in-betweening: "
           f"{config.inbetween_windows} windows", file=sys.stderr)

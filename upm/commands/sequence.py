@@ -21,7 +21,7 @@ HELP = "join clips (CLIP@A:B ...) with transitions into one AMC or BVH"
 
 
 def configure(parser) -> None:
-    from upm.commands.common import add_data_argument
+    from upm.commands.common import add_data_argument, add_performed_config_argument
     from upm.commands.transition import add_cut_argument, add_method_arguments
 
     add_data_argument(parser)
@@ -35,18 +35,22 @@ def configure(parser) -> None:
                         help="the motion to write: AMC, or BVH (centimetres, y up) by the "
                              "extension")
     parser.add_argument("--json", metavar="FILE.json", default=None,
-                        help="also write where each piece and window lies, and the timing")
+                        help="also write where each piece and window lies, and the timing "
+                             "(with --method performed, how the humanoid performed each)")
+    add_performed_config_argument(parser)
 
 
 def run(args) -> int:
     import json
 
     from upm.bvh.formats import check_motion_path, write_motion
+    from upm.commands.common import performed_setup
     from upm.commands.transition import sequence_from_args
     from upm.core.errors import UsageError
     from upm.core.fileio import atomic_write_text
 
     check_motion_path(args.out)
+    performed_setup(args)
 
     if len(args.pieces) < 2:
         raise UsageError("a sequence needs at least two pieces (CLIP@A:B CLIP@A:B ...)")
@@ -62,6 +66,10 @@ def run(args) -> int:
         "windows": [{"first_frame": w.start, "stop_frame": w.stop, "seconds": sec}
                     for w, sec in zip(sequence.windows, sequence.seconds, strict=True)],
     }
+    if sequence.method == "performed":
+        for window, figures in zip(report["windows"], sequence.diagnostics, strict=True):
+            window["performed"] = {k.removeprefix("performed_"): v for k, v in figures.items()
+                                   if k.startswith("performed_")}
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     print(f"wrote {args.out}: {motion.n_frames} frames at {motion.fps:g} fps "
@@ -71,5 +79,9 @@ def run(args) -> int:
     for i, window in enumerate(report["windows"], start=1):
         print(f"  window {i:<11} frames {window['first_frame']}-{window['stop_frame'] - 1}"
               f"  ({1e3 * window['seconds']:.2f} ms)")
+        if sequence.method == "performed":
+            from upm.commands.transition import performed_line
+
+            print("    " + performed_line(sequence.diagnostics[i - 1], args.follow or "feasible"))
     print("(frame numbers 0-based; AMC frame numbers are one more)")
     return 0

@@ -32,6 +32,10 @@ far under mocap's precision. --offset-deg 0.1 with a few --offset-seed values ru
 same sequence with every joint angle moved by its own small constant, to see how often an
 outcome holds.
 
+--effort offline runs the free-root simulations (the whole sequence and each window's) as
+a sampling search over the servos' targets instead (SAMCON-style; no root force): can
+this body perform it at all? Tens of wall s per simulated s; --threads N for its rollouts.
+
 --strength K multiplies every joint's torque limit by K (default 1: the strength tables'
 strong adult): would a stronger body carry out what this one cannot?
 
@@ -56,6 +60,7 @@ def configure(parser) -> None:
     from upm.commands.common import (
         add_config_argument,
         add_data_argument,
+        add_effort_arguments,
         add_strength_argument,
     )
     from upm.commands.transition import add_cut_argument, add_method_arguments
@@ -82,6 +87,7 @@ def configure(parser) -> None:
                              "sequences through at more cost; over --config's)")
     add_config_argument(parser, "the balance controller, the servo tracking and the "
                                 "residual check")
+    add_effort_arguments(parser)
     add_strength_argument(parser)
     parser.add_argument("--offset-deg", metavar="SIGMA", type=float, default=0.0,
                         help="move every joint angle of the sequence by its own constant "
@@ -148,11 +154,17 @@ def run(args) -> int:
     )
     from controller.report import write_report
     from humanoid_xml import catalog_model_path, load_model
-    from upm.commands.common import check_strength, controller_config
+    from upm.commands.common import (
+        check_effort,
+        check_strength,
+        controller_config,
+        performed_setup,
+    )
     from upm.commands.transition import sequence_from_args
     from upm.core.errors import UsageError
 
     strength = check_strength(args.strength)
+    check_effort(args)
     if (args.amc or args.control) and "free" not in args.modes:
         raise UsageError("--amc and --control need the free-root run: add free to --modes")
     if args.control and args.controller != "balance":
@@ -185,7 +197,8 @@ def run(args) -> int:
     if args.viewer and not has_display():
         raise UsageError("--viewer needs a display (DISPLAY is not set); use --video V.mp4 "
                          "to render offscreen instead")
-    config = controller_config(args)
+    config = controller_config(args).with_threads(args.threads)
+    performed_setup(args)
     catalog, refs, sequence = sequence_from_args(args, args.sequence)
     motion = sequence.motion
     if args.offset_deg > 0:
@@ -207,7 +220,7 @@ def run(args) -> int:
         pieces=[(str(ref), part) for ref, part in zip(refs, sequence.pieces, strict=True)],
         tracking_modes=tuple(args.modes), window_free=args.window_runs,
         model_path=model_path, controller=args.controller, progress=True,
-        processes=args.processes, strength=strength, config=config)
+        processes=args.processes, strength=strength, config=config, effort=args.effort)
     report["sequence"] = {"pieces": [str(r) for r in refs], "method": sequence.method,
                           "frames": sequence.frames, "alpha": args.alpha,
                           "cut": args.cut,

@@ -11,12 +11,18 @@ Methods (--method): upm (default; the paper: UPM key posture + cubic B-spline; n
 --map), feasible (the recommended one: UPM key the humanoid can take, window fitted to
 stay in the joint ranges with minimum jerk; needs a UPM --map), som (needs a SOM --map),
 classnn and snap (key posture from the nearest training postures of --data's train
-split: no map needed), linear, slerp, inertialize, spacetime.
+split: no map needed), linear, slerp, inertialize, spacetime, and performed: the window
+as the free-root humanoid performed it while following --follow's (default feasible),
+found by the offline effort's search (--config FILE.toml: its [offline] section); its
+figures (joint and body error against the asked window, fall, torque saturation) go into
+--json's diagnostics, prefixed performed_.
 
 Examples:
   upm transition --map upm.npz --from 02_01@200 --to 02_03@20 --out walk-run.amc
   upm transition --method feasible --map upm.npz --from 02_01@200 --to 02_03@20 --out f.amc
   upm transition --method linear --from 05_01 --to 05_11 --out lin.amc --json lin.json
+  upm transition --method performed --follow linear --from 02_01@200 --to 02_03@20 \
+      --out p.amc --json p.json
 """
 
 from __future__ import annotations
@@ -28,7 +34,9 @@ def add_method_arguments(parser, default_method: str = "upm") -> None:
     """--method, --map, --alpha, --frames, --no-align: shared with ``upm sequence``."""
     parser.add_argument("--method", default=default_method, metavar="M",
                         help="upm, feasible, som, classnn, snap, linear, slerp, inertialize, "
-                             f"spacetime (default: {default_method}; the registry: "
+                             "spacetime, performed (the window as the free-root humanoid "
+                             "performed it, following --follow's; about a minute a window) "
+                             f"(default: {default_method}; the registry: "
                              "upm.transitions.METHODS)")
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="trained posture map (upm train), needed by --method "
@@ -40,6 +48,9 @@ def add_method_arguments(parser, default_method: str = "upm") -> None:
     parser.add_argument("--no-align", dest="align_heading", action="store_false",
                         help="do not turn the next clip about the vertical to continue the "
                              "previous clip's heading")
+    parser.add_argument("--follow", metavar="M", default=None,
+                        help="with --method performed: the method whose window the humanoid "
+                             "follows (default: feasible)")
 
 
 def add_cut_argument(parser) -> None:
@@ -79,7 +90,8 @@ def sequence_from_args(args, pieces_text: list[str]):
     if getattr(args, "cut", "whole") == "matched" and len(pieces) > 1:
         pieces, refs = _matched(pieces, refs, [start for _, start in spans])
     if len(refs) > 1:
-        key_source = key_source_for(args.method, args.map, catalog)
+        key_source = key_source_for(args.method, args.map, catalog, args.follow,
+                                    getattr(args, "performer_config", None))
     else:
         # one piece has no transition: --method is only checked, --map is not read
         key_source = None
@@ -111,7 +123,7 @@ def _matched(pieces, refs, starts):
 
 
 def configure(parser) -> None:
-    from upm.commands.common import add_data_argument
+    from upm.commands.common import add_data_argument, add_performed_config_argument
 
     add_data_argument(parser)
     parser.add_argument("--from", dest="source", required=True, metavar="CLIP[@FRAME]",
@@ -130,6 +142,7 @@ def configure(parser) -> None:
     parser.add_argument("--plot", metavar="FIG.png", default=None,
                         help="also plot one DOF across the window, this method vs linear "
                              "(the paper's Fig. 13)")
+    add_performed_config_argument(parser)
     parser.add_argument("--plot-dof", metavar="JOINT.AXIS", default=None,
                         help="the DOF to plot, e.g. rhumerus.rz (default: the right shoulder "
                              "DOF where the method and linear differ most)")
@@ -193,6 +206,7 @@ def run(args) -> int:
     import json
 
     from upm.bvh.formats import check_motion_path, write_motion
+    from upm.commands.common import performed_setup
     from upm.core.errors import UsageError
     from upm.core.fileio import atomic_write_text
     from upm.motion.catalog import Catalog
@@ -200,6 +214,7 @@ def run(args) -> int:
     from upm.transitions.load import key_source_for
 
     check_motion_path(args.out)
+    performer_config = performed_setup(args)
 
     if args.context is not None and args.context < 2:
         raise UsageError(f"--context must be at least 2 frames, not {args.context}")
@@ -214,7 +229,7 @@ def run(args) -> int:
     target_ref = _single_frame(args.target, "--to")
     before, a_frame = _clip_window(catalog, source_ref, "from", args.context)
     after, b_frame = _clip_window(catalog, target_ref, "to", args.context)
-    key_source = key_source_for(args.method, args.map, catalog)
+    key_source = key_source_for(args.method, args.map, catalog, args.follow, performer_config)
     result = transition(args.method, before, after, args.frames, args.alpha, key_source,
                         align_heading=args.align_heading)
     write_motion(args.out, result.motion)
@@ -222,6 +237,8 @@ def run(args) -> int:
     report.update({"from": f"{source_ref.name}@{a_frame}", "to": f"{target_ref.name}@{b_frame}",
                    "out": str(args.out), "out_frames": result.motion.n_frames,
                    "asf": str(catalog.info(source_ref.name).asf_path)})
+    if args.method == "performed":
+        report["follow"] = key_source.follow.name
     if args.json:
         atomic_write_text(args.json, json.dumps(report, indent=2) + "\n")
     if args.plot:
@@ -238,4 +255,25 @@ def run(args) -> int:
     print(f"wrote {args.out}: {result.motion.n_frames} frames (ASF {report['asf']}); window = "
           f"frames {w.start}-{w.stop - 1} (0-based; AMC frame numbers {w.start + 1}-{w.stop})")
     print(f"transition computed in {1e3 * result.seconds:.2f} ms")
+    if args.method == "performed":
+        print(performed_line(result.diagnostics, key_source.follow.name))
     return 0
+
+
+def performed_line(diagnostics, follow: str) -> str:
+    """How the humanoid performed the window, in one line (a fall is a finding)."""
+    d = diagnostics
+    line = (f"performed (following {follow}): joint error {d['performed_joint_error_deg']:.1f} "
+            f"deg RMS, body error {d['performed_body_error_mm']:.0f} mm mean against the "
+            f"asked window; torque at its limit {100 * d['performed_torque_saturation_share']:.1f}"
+            f" % of the time; joins {d['performed_join_step_start_deg']:.1f} deg into the run "
+            f"({d['performed_context_before_s']:.2f} s before the window), "
+            f"{d['performed_join_step_end_deg']:.1f} deg out of it "
+            f"({d['performed_context_after_s']:.2f} s after)")
+    if d["performed_fell"]:
+        line += ("; the body FELL" + (" in the window" if d["performed_fell_in_window"]
+                                      else " after the window")
+                 + ": it cannot perform this window as asked (a finding)")
+    elif d["performed_left_window"]:
+        line += "; it had to leave the asked window to stay up"
+    return line

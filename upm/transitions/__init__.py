@@ -47,12 +47,22 @@ from upm.transitions.registry import (
 from upm.transitions.sequence import Sequence, build_sequence
 from upm.transitions.sources import ClassNearest, NearestPosture, training_postures
 
+#: Names of the methods whose window is made from the postures alone (every method but
+#: those whose window the humanoid performs, :attr:`TransitionMethod.finish`).
+KINEMATIC_METHODS: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.finish is None)
+#: Names of the methods whose window the humanoid performs (``performed``): they need the
+#: humanoid's performer (:mod:`upm.transitions.performed`) and cost about a minute a window.
+PERFORMED_METHODS: tuple[str, ...] = tuple(n for n, m in METHODS.items()
+                                           if m.finish is not None)
 #: Names of the methods whose key posture comes from a source (a map or an ablation).
-KEY_POSTURE_METHODS: tuple[str, ...] = tuple(n for n, m in METHODS.items() if m.needs_key_source)
+KEY_POSTURE_METHODS: tuple[str, ...] = tuple(n for n in KINEMATIC_METHODS
+                                             if METHODS[n].needs_key_source)
 
 __all__ = [
     "KEY_POSTURE_METHODS",
+    "KINEMATIC_METHODS",
     "METHODS",
+    "PERFORMED_METHODS",
     "ClassNearest",
     "KeyPostureSource",
     "KeySourceContext",

@@ -142,7 +142,7 @@ class WindowResult:
 
 
 #: The roles a method can play in the study (see :class:`TransitionMethod`), in table order.
-ROLES = ("recommended", "paper", "paper-comparison", "baseline", "ablation")
+ROLES = ("recommended", "paper", "paper-comparison", "baseline", "ablation", "performed")
 
 
 @dataclass(frozen=True)
@@ -172,12 +172,18 @@ class TransitionMethod:
     role : str
         What the method is in the study (one of :data:`ROLES`): ``"paper"`` (the paper's
         method), ``"paper-comparison"`` (what the paper compares it with), ``"recommended"``
-        (the method the project recommends), ``"baseline"`` (another standard method) or
-        ``"ablation"`` (a part of a method taken away). Tables, figures and the studio
+        (the method the project recommends), ``"baseline"`` (another standard method),
+        ``"ablation"`` (a part of a method taken away) or ``"performed"`` (the window as the
+        humanoid performed another method's). Tables, figures and the studio
         read it.
     needs_map : bool
         Whether the key source is a trained posture map (``--map``; the study trains
         it), rather than nothing or something fitted on the data at once.
+    finish : callable or None
+        For a method whose window is made from the assembled transition:
+        ``finish(transition: Transition, key_source) -> Transition``, called on the
+        transition ``solve``'s window made (``performed``: what the humanoid did while
+        following it). None for the others.
     """
 
     name: str
@@ -189,6 +195,7 @@ class TransitionMethod:
     key_help: str = ""
     role: str = "baseline"
     needs_map: bool = False
+    finish: Callable | None = None
 
     def __post_init__(self):
         if self.role not in ROLES:

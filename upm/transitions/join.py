@@ -204,8 +204,9 @@ def transition(method: str, before: Motion, after: Motion, frames: int = 20,
     )
     diagnostics = dict(result.diagnostics)
     diagnostics.update(info)
-    return Transition(
+    out = Transition(
         motion=motion, window=slice(n1, n1 + frames), method=spec.name, frames=frames,
         alpha=alpha, key_posture_deg=result.key_posture_deg, key_time=problem.key_time,
         seconds=seconds, heading_turn_deg=root.heading_turn_deg, diagnostics=diagnostics,
     )
+    return out if spec.finish is None else spec.finish(out, key_source)

@@ -15,18 +15,33 @@ This module imports the method modules and nothing that imports it back
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from upm.core.errors import UsageError
-from upm.transitions import feasible, inertialize, keyposture, linear, slerp, spacetime
+from upm.transitions import (
+    feasible,
+    inertialize,
+    keyposture,
+    linear,
+    performed,
+    slerp,
+    spacetime,
+)
 from upm.transitions.base import KeyPostureSource, TransitionMethod
+
+
+def _performed_key_source(context):
+    """``performed``'s key source: the followed method's, built by this registry."""
+    return performed.key_source_of(context, get_method, build_key_source)
+
 
 #: The methods the project ships, in table order.
 _BUILT_IN: tuple[TransitionMethod, ...] = (
     keyposture.UPM, keyposture.SOM, keyposture.CLASSNN, keyposture.SNAP, linear.METHOD,
     slerp.METHOD, inertialize.METHOD, spacetime.METHOD, feasible.METHOD,
+    replace(performed.METHOD, key_source=_performed_key_source),
 )
 
 #: Every transition method, by name (registration order).
@@ -99,6 +114,11 @@ class KeySourceContext:
         The method being built (set by :func:`build_key_source`; for error messages).
     map_used : bool
         Whether a builder read ``map_path`` (``--map`` given but unused is warned about).
+    follow : str or None
+        ``performed``'s followed method (``--follow``; None: ``feasible``).
+    performer_config : object or None
+        ``performed``'s performer configuration (a
+        :class:`controller.config.ControllerConfig`, ``--config``; None: the defaults).
     """
 
     catalog: object | None = None
@@ -108,6 +128,8 @@ class KeySourceContext:
     train_step: int = 1
     method: str = ""
     map_used: bool = False
+    follow: str | None = None
+    performer_config: object | None = None
     _maps: dict = field(default_factory=dict, repr=False)
     _postures: np.ndarray | None = field(default=None, repr=False)
 

@@ -36,6 +36,8 @@ class Sequence:
         Compute time of each transition.
     method : str
     frames : int
+    diagnostics : tuple of dict
+        Each transition's diagnostics (:attr:`upm.transitions.Transition.diagnostics`).
     """
 
     motion: Motion
@@ -44,6 +46,7 @@ class Sequence:
     seconds: tuple[float, ...]
     method: str
     frames: int
+    diagnostics: tuple[dict, ...] = ()
 
 
 def build_sequence(pieces: list[Motion], method: str = "upm", frames: int = 20,
@@ -71,15 +74,16 @@ def build_sequence(pieces: list[Motion], method: str = "upm", frames: int = 20,
     rate = float(fps) if fps is not None else pieces[0].fps
     pieces = [p if p.fps == rate else resample(p, rate) for p in pieces]
     joined = pieces[0]
-    windows, spans, seconds = [], [slice(0, joined.n_frames)], []
+    windows, spans, seconds, diagnostics = [], [slice(0, joined.n_frames)], [], []
     for piece in pieces[1:]:
         step = transition(method, joined, piece, frames, alpha, key_source,
                           align_heading=align_heading, context=context)
         windows.append(step.window)
         spans.append(slice(step.window.stop, step.motion.n_frames))
         seconds.append(step.seconds)
+        diagnostics.append(dict(step.diagnostics))
         joined = step.motion
     names = "+".join(p.name for p in pieces if p.name)
     return Sequence(motion=joined.replace(name=names), windows=tuple(windows),
                     pieces=tuple(spans), seconds=tuple(seconds), method=method,
-                    frames=int(frames))
+                    frames=int(frames), diagnostics=tuple(diagnostics))

@@ -1,0 +1,79 @@
+"""The ``offline`` section of :class:`controller.config.ControllerConfig`: the offline
+effort's sampling search over the servo targets (:mod:`controller.offline`, after SAMCON:
+Liu et al. 2010, "Sampling-based contact-rich motion control")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class OfflineWeights:
+    """The weights of a state's cost against the reference
+    (:func:`controller.offline.cost.state_cost`): each term is a squared error, so that
+    a state at the reference costs 0 and one about 6 deg, 10 deg, 5 cm, 10 cm and 10 cm
+    off in each term costs about 0.5, 0.6, 0.1, 0.5 and 0.4."""
+
+    #: Sum over the hinges of the squared angle error, rad^2 (45 hinges 6 deg off: 0.49).
+    pose: float = 1.0
+    #: Squared angle between the pelvis's orientation and the reference's, rad^2 (20, not
+    #: 4: on the walk 02_01, 0-239, with 120 samples, the pelvis's tilt was the first term
+    #: to grow and the run fell at 1.45 s with 4, stood with 20).
+    root: float = 20.0
+    #: Squared error of the pelvis's height, m^2.
+    height: float = 40.0
+    #: Sum over the end effectors (head, hands, feet) of the squared error of their
+    #: position in the pelvis's frame, m^2.
+    end: float = 10.0
+    #: Squared error of the capture point's horizontal offset from the middle of the feet
+    #: (the reference's own offset is the target: the body over its support as the
+    #: performer had it), m^2. The capture point, not the centre of mass: with the centre
+    #: of mass, 02_10 (wash self, 0-399, 120 samples) drifted forward 6 cm in 0.9 s, no
+    #: segment's samples could bring it back, and it fell at 2.23 s; with the capture point
+    #: it stood (2.4 deg RMS).
+    balance: float = 40.0
+
+
+@dataclass(frozen=True)
+class OfflineConfig:
+    """The offline effort's search (:func:`controller.offline.perform`): segment by segment,
+    corrections of the servo targets are sampled from the best states so far, rolled
+    out in MuJoCo, and the best kept; where every sample is in trouble the search goes
+    back up to :attr:`backtracks` segments."""
+
+    #: Length of a segment, s (rounded to whole frames, at least one). 0.2, not SAMCON's
+    #: 0.1: on the whole walk 02_01 (120 samples, root weight 20) 0.1 s with coherence 0.7
+    #: fell at 2.77 s, 0.2 s with coherence 0.5 stood (joint error 3.9 deg RMS).
+    segment_s: float = 0.2
+    #: Rollouts per segment in all, spread evenly over the kept states.
+    samples: int = 240
+    #: States kept after each segment (the best by cost).
+    keep: int = 12
+    #: Standard deviation of a sampled correction of each servo's target, degrees.
+    sigma_deg: float = 6.0
+    #: Temporal coherence of the corrections: a segment's correction is this times its
+    #: parent's plus ``sqrt(1 - coherence^2)`` times a fresh draw (0: independent
+    #: segments; the targets are interpolated from the parent's correction to the new one
+    #: over the segment, so they never jump).
+    coherence: float = 0.5
+    #: A sample is in trouble where its cost (mean over the segment's frames) is above
+    #: this, or it has fallen (:mod:`controller.falls` with the ``falls`` section).
+    trouble_cost: float = 2.0
+    #: Where every sample of a segment is in trouble, the search goes back this many
+    #: segments at most (1 the first time at that segment, then 2, ...) and samples again.
+    backtracks: int = 3
+    #: Added to the cost of a fallen state.
+    fall_cost: float = 1e4
+    #: The search simulates at most ``budget * samples`` times the motion's physics steps
+    #: in all: 1 is one pass of :attr:`samples` rollouts over every segment, with no room
+    #: to go back; a backtrack is allowed only while the passes done, the ones it adds and
+    #: one for each segment still ahead stay within it. At the defaults, 240 rollouts of
+    #: 600 physics steps per simulated second make a pass (144,000 steps); 4 passes are at
+    #: most 576,000 steps per simulated second (about 17 wall s at 34,000 steps/s on two
+    #: cores, plus the cost's kinematics).
+    budget: float = 4.0
+    weights: OfflineWeights = field(default_factory=OfflineWeights)
+    #: Threads of ``mujoco.rollout`` (the results do not depend on it).
+    threads: int = 2
+    #: Seed of the sampled corrections: the same seed, the same run, bit for bit.
+    seed: int = 0

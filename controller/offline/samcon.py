@@ -1,0 +1,201 @@
+"""The offline effort's search (after SAMCON: Liu et al. 2010): can this body perform
+this motion without any external force?
+
+The body is the free-root humanoid with its position servos (the servo tracking of
+:mod:`controller.tracking`: no root actuator, ``xfrc_applied`` zero). The motion is cut
+into segments of ``offline.segment_s``. For each segment, ``offline.samples`` corrections
+of the servo targets are drawn (Gaussian, ``sigma_deg`` per servo, temporally coherent
+with the parent's correction by ``coherence``; the first sample of each parent only
+decays the parent's correction), spread evenly over the ``keep`` best states the search
+holds at the segment's start, rolled out in MuJoCo (``mujoco.rollout`` on
+``offline.threads`` threads: the results do not depend on it) and scored by
+:func:`controller.offline.cost.state_cost` over the segment's frames (plus
+``fall_cost`` for a fall, :mod:`controller.falls`); the ``keep`` best are kept. Where every
+sample is in trouble (cost above ``trouble_cost`` or fallen), the search goes back 1, then
+2, ... up to ``backtracks`` segments and samples again, within ``budget`` (see
+:class:`controller.config.OfflineConfig`). Where every kept state has fallen, the search
+stops and the rest runs on the servos alone. Deterministic for a seed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from controller.config import DEFAULT, ControllerConfig
+
+
+@dataclass(frozen=True, eq=False)
+class _Node:
+    """A state the search reached at the end of a segment."""
+
+    parent: _Node | None
+    state: np.ndarray  # (nstate,) full physics state at the segment's end
+    delta: np.ndarray  # (nu,) the correction at the segment's end, rad
+    ctrl: np.ndarray  # (steps, nu) the segment's servo targets
+    cost: float
+    fell: bool
+
+
+@dataclass(frozen=True)
+class SearchOutcome:
+    """What the search chose.
+
+    Attributes
+    ----------
+    ctrl : ndarray, shape ((T-1) * substeps, nu)
+        The servo targets of every physics step.
+    rollouts : int
+        Rollouts simulated (of one segment each; the servos-alone rest not counted).
+    steps : int
+        Physics steps simulated in all.
+    passes : float
+        Steps simulated over ``samples`` times the motion's steps (at most the budget).
+    backtracks : int
+        Times the search went back.
+    segments : int
+    searched_segments : int
+        Segments searched before every kept state had fallen (all of them if none).
+    segment_cost : ndarray, shape (segments,)
+        The chosen path's cost per segment (NaN past the search).
+    """
+
+    ctrl: np.ndarray
+    rollouts: int
+    steps: int
+    passes: float
+    backtracks: int
+    segments: int
+    searched_segments: int
+    segment_cost: np.ndarray
+
+
+def segment_bounds(n_frames: int, fps: float, segment_s: float) -> list[int]:
+    """Frame boundaries of the segments: 0, F, 2F, ..., T-1 (F = segment_s in frames,
+    at least 1; the last segment may be shorter)."""
+    step = max(1, round(segment_s * fps))
+    bounds = list(range(0, n_frames - 1, step)) + [n_frames - 1]
+    return bounds
+
+
+def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = False
+           ) -> SearchOutcome:
+    """The search over the servo targets of a free-root tracking plan.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+        The humanoid (for the features; the plan's copy is simulated).
+    plan : controller.tracking.plan.TrackingPlan
+        A ``"free"`` plan (:func:`controller.tracking.plan.plan_tracking`).
+    config : controller.config.ControllerConfig
+        Its ``offline`` section and ``falls``.
+    progress : bool
+        A progress bar (segments) on a terminal.
+    """
+    from controller.body import body_figures
+    from controller.offline.cost import FeatureMaker
+    from controller.offline.rollouts import Roller
+    from upm.core.progress import progress as progress_bar
+
+    off = config.offline
+    sim, substeps = plan.model, plan.substeps
+    n_frames = plan.reference_qpos.shape[0]
+    bounds = segment_bounds(n_frames, plan.fps, off.segment_s)
+    n_seg = len(bounds) - 1
+    features = FeatureMaker(sim)
+    ref = features.reference(plan.reference_qpos, plan.fps)
+    figures = body_figures(model)
+    rng = np.random.default_rng(off.seed)
+    sigma = math.radians(off.sigma_deg)
+    fresh = math.sqrt(max(0.0, 1.0 - off.coherence ** 2))
+    nu = sim.nu
+    limit_steps = off.budget * off.samples * plan.steps
+    with Roller(sim, off.threads) as roller:
+        start = _Node(None, roller.state_of(plan.start_qpos, plan.start_qvel),
+                      np.zeros(nu), np.empty((0, nu)), 0.0, False)
+        kept: list[list[_Node]] = [[start]] + [[] for _ in range(n_seg)]
+        fails = [0] * n_seg
+        rollouts = steps = backtracks = 0
+        j = 0
+        searched = n_seg
+        bar = progress_bar(total=n_seg, desc="offline search", unit="segment",
+                           disable=None if progress else True)
+        while j < n_seg:
+            parents = kept[j]
+            a, b = bounds[j] * substeps, bounds[j + 1] * substeps
+            owner = np.arange(off.samples) % len(parents)
+            noise = rng.standard_normal((off.samples, nu)) * sigma
+            noise[:len(parents)] = 0.0  # the first of each parent: its correction decayed
+            before = np.stack([parents[i].delta for i in owner])
+            delta = off.coherence * before + fresh * noise
+            w = (np.arange(1, b - a + 1) / (b - a))[None, :, None]
+            ctrl = plan.ctrl[None, a:b] + (1 - w) * before[:, None] + w * delta[:, None]
+            states = roller.run(np.stack([parents[i].state for i in owner]), ctrl)
+            rollouts += off.samples
+            steps += off.samples * (b - a)
+            frames = np.arange(bounds[j] + 1, bounds[j + 1] + 1)
+            at = (frames - bounds[j]) * substeps - 1  # the step that ends each frame
+            cost, fell = _score(roller.qpos(states[:, at]), roller.qvel(states[:, at]),
+                                frames, ref, features, figures, config)
+            order = np.lexsort((np.arange(off.samples), cost))[:off.keep]
+            trouble = (cost > off.trouble_cost) | fell
+            if trouble.all() and fails[j] < off.backtracks:
+                back = min(fails[j] + 1, j)
+                again = (b - bounds[j - back] * substeps) + (plan.steps - b)
+                if steps + off.samples * again <= limit_steps:
+                    fails[j] += 1
+                    backtracks += 1
+                    bar.update(-back)
+                    j -= back
+                    continue
+            kept[j + 1] = [_Node(parents[owner[i]], states[i, -1].copy(), delta[i],
+                                 ctrl[i], float(cost[i]), bool(fell[i])) for i in order]
+            bar.update(1)
+            j += 1
+            if all(node.fell for node in kept[j]):
+                searched = j
+                break
+        bar.close()
+    path = []
+    node = kept[searched][0]
+    while node.parent is not None:
+        path.append(node)
+        node = node.parent
+    path.reverse()
+    chosen = plan.ctrl.copy()
+    seg_cost = np.full(n_seg, np.nan)
+    for k, node in enumerate(path):
+        chosen[bounds[k] * substeps:bounds[k + 1] * substeps] = node.ctrl
+        seg_cost[k] = node.cost
+    total = plan.ctrl.shape[0] * off.samples
+    return SearchOutcome(ctrl=chosen, rollouts=rollouts, steps=steps,
+                         passes=steps / total if total else 0.0, backtracks=backtracks,
+                         segments=n_seg, searched_segments=searched, segment_cost=seg_cost)
+
+
+def _score(qpos, qvel, frames, ref, features, figures, config):
+    """Each sample's cost (mean over its frames, ``fall_cost`` added where it fell) and
+    whether it fell: ``qpos`` (N, F, nq), ``qvel`` (N, F, nv) at the reference's
+    ``frames`` (F,)."""
+    from controller.falls import fallen
+    from controller.offline.cost import Features, state_cost
+
+    n, f, nq = qpos.shape
+    flat = qpos.reshape(n * f, nq)
+    velocity = qvel.reshape(n * f, qvel.shape[-1])
+    finite = np.all(np.isfinite(flat), axis=1) & np.all(np.isfinite(velocity), axis=1)
+    sim = features(np.where(finite[:, None], flat, 0.0),
+                   np.where(finite[:, None], velocity, 0.0))
+    idx = np.tile(frames, n)
+    ref_at = Features(*(getattr(ref, name)[idx] for name in Features.__dataclass_fields__))
+    cost = state_cost(sim, ref_at, config.offline.weights).reshape(n, f)
+    down = fallen(sim.root_height_m, sim.head_height_m, ref_at.root_height_m,
+                  ref_at.head_height_m, figures, config.falls).reshape(n, f)
+    down |= ~finite.reshape(n, f)
+    fell = down.any(axis=1)
+    total = cost.mean(axis=1) + config.offline.fall_cost * fell
+    total[~finite.reshape(n, f).all(axis=1)] = np.inf
+    return total, fell
