@@ -42,14 +42,14 @@ def run(args) -> int:
     from upm.core.progress import progress
     from upm.motion.catalog import Catalog
 
+    if args.soak_s is not None and not (args.soak_s > 0 and math.isfinite(args.soak_s)):
+        raise UsageError(f"--soak-s {args.soak_s}: give a positive number of seconds")
     catalog = Catalog(args.data)
     modules = discover()
     names = args.only or list(modules)
     unknown = [n for n in names if n not in modules]
     if unknown:
         raise UsageError(f"no benchmark {unknown[0]!r} (known: {', '.join(modules)})")
-    if args.soak_s is not None and not (args.soak_s > 0 and math.isfinite(args.soak_s)):
-        raise UsageError(f"--soak-s {args.soak_s}: give a positive number of seconds")
     context = BenchContext(data_dir=catalog.root, quick=args.quick, soak_s=args.soak_s)
     report = {
         "schema": 1,
