@@ -417,3 +417,19 @@ def test_a_non_loopback_host_is_warned_about(tmp_path, capsys):
     assert "ssh -L 8080:127.0.0.1:8080" in err
     assert main(["studio", "--data", str(tmp_path / "none")]) == 2
     assert "warning" not in capsys.readouterr().err
+
+
+def test_no_studio_runs_without_its_origin_check(session, monkeypatch):
+    """A viser that started its websocket server another way would leave the check out:
+    the studio stops that server and refuses to run."""
+    import contextlib
+    import socket
+
+    import studio.app
+
+    monkeypatch.setattr(studio.app, "guarded_viser", lambda guard: contextlib.nullcontext())
+    port = _free_port()
+    with pytest.raises(RuntimeError, match="unguarded"):
+        studio.app.Studio(session, port=port)
+    with socket.socket() as sock:  # the port is free again: the server was stopped
+        sock.bind(("127.0.0.1", port))
