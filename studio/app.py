@@ -2,6 +2,10 @@
 
 The humanoid's capsules play clip 1 -> window -> clip 2 in a loop; the GUI changes clips,
 frames, method, alpha and window length, and every change recomputes at once.
+
+What a page can make the studio do is bounded: its websocket lets in only the studio's
+own page (:mod:`studio.origin`), exports go into one folder and never overwrite
+(:mod:`studio.exports`), and one physics check runs at a time.
 """
 
 from __future__ import annotations
@@ -11,6 +15,8 @@ import time
 
 import numpy as np
 
+from studio.exports import ExportFolder, ExportRefused
+from studio.origin import OriginGuard, guarded_viser
 from studio.session import Scene, Session, capsule_geoms, method_names
 
 VALID_RGB = (170, 180, 200)
@@ -32,14 +38,36 @@ def _strip_rgb(valid, window: slice, height: int = 12) -> np.ndarray:
 
 
 class Studio:
-    """A running studio: a viser server drawing a :class:`~studio.session.Session`."""
+    """A running studio: a viser server drawing a :class:`~studio.session.Session`.
 
-    def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 8080):
+    Parameters
+    ----------
+    session : studio.session.Session
+    host, port : str, int
+        Where to serve (a taken port: the next free one, :attr:`port`).
+    out : path
+        The export folder (:class:`studio.exports.ExportFolder`).
+    allow_origins : sequence of str
+        Origins besides the studio's own page whose websockets are let in (normalised,
+        :func:`studio.origin.parse_allowed`).
+    """
+
+    def __init__(self, session: Session, host: str = "127.0.0.1", port: int = 8080, *,
+                 out="studio-exports", allow_origins=()):
         import viser
 
         self.session = session
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.guard = OriginGuard(host, allow_origins)
+        with guarded_viser(self.guard):
+            self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        if not self.guard.installed:
+            self.server.stop()
+            raise RuntimeError("the studio could not put its websocket Origin check on this "
+                               "viser version (it starts its server another way): refusing "
+                               "to run unguarded")
         self.port = self.server.get_port()
+        self.exports = ExportFolder(out)
+        self._checking = threading.Lock()
         self.lock = threading.Lock()
         self._holding = False
         self._capsules, self._ghosts = [], []
@@ -65,11 +93,11 @@ class Studio:
         self.strip = gui.add_image(np.zeros((12, 2, 3), np.uint8), label="valid frames")
         self.dof = gui.add_text("Fig. 13 DOF", "rhumerus.rz")
         self.curve = gui.add_image(np.full((8, 8, 3), 255, np.uint8), label="DOF vs linear")
-        self.amc_path = gui.add_text("export to (.amc or .bvh)", "transition.amc")
+        self.amc_path = gui.add_text("export name (.amc or .bvh)", "transition.amc")
         export = gui.add_button("export AMC / BVH")
         export.on_click(lambda _: self.export())
         check = gui.add_button("physics check (upm simulate)")
-        check.on_click(lambda _: threading.Thread(target=self.check, daemon=True).start())
+        check.on_click(lambda _: self.start_check())
         self.report = gui.add_markdown("")
         self.dof.on_update(lambda _: self.apply_gui())
         for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
@@ -207,20 +235,58 @@ class Studio:
         except Exception as error:  # a bad DOF name: say so in the page
             self.status.content += f"  \n**Fig. 13:** {error}"
 
-    def export(self) -> str:
-        """Write the current transition as AMC or BVH (by the extension)."""
+    def export(self) -> str | None:
+        """Write the current transition as AMC or BVH (by the extension of the export
+        name) into the export folder; the path written, or None for a refused name (the
+        page says why)."""
         from studio.session import export_amc
 
-        path = export_amc(self.scene.result, self.amc_path.value)
-        self.report.content = f"wrote {path}"
-        return path
+        result = self.scene.result
+        try:
+            path = self.exports.write(self.amc_path.value, lambda tmp: export_amc(result, tmp))
+        except ExportRefused as refused:
+            self.report.content = f"**export refused:** {refused}"
+            return None
+        self.report.content = f"wrote {path.name} in {path.parent}"
+        return str(path)
 
-    def check(self) -> list[dict]:
-        """Run the physics check of the current transition and show its summary."""
-        from studio.session import physics_check
+    def start_check(self) -> bool:
+        """The button's action: the physics check in a thread of its own, unless one is
+        running (then the page says the click is ignored). Whether a check started."""
+        if not self._checking.acquire(blocking=False):
+            self._busy()
+            return False
+        threading.Thread(target=self._check_held, daemon=True).start()
+        return True
+
+    def _busy(self) -> None:
+        self.report.content = ("**a physics check is already running:** this click is "
+                               "ignored; wait for its figures")
+
+    def _check_held(self) -> None:
+        try:
+            self._run_check()
+        except Exception as error:  # shown in the page, the server keeps running
+            self.report.content = f"**physics check failed:** {error}"
+        finally:
+            self._checking.release()
+
+    def check(self) -> list[dict] | None:
+        """Run the physics check of the current transition here and show its summary; None
+        (and a message in the page) if a check is running already."""
+        if not self._checking.acquire(blocking=False):
+            self._busy()
+            return None
+        try:
+            return self._run_check()
+        finally:
+            self._checking.release()
+
+    def _run_check(self) -> list[dict]:
+        from studio import session as studio_session
 
         self.report.content = "physics check running..."
-        rows = physics_check(self.scene.model, self.scene.result)
+        rows = studio_session.physics_check(self.scene.model, self.scene.result)
         lines = []
         for row in rows:
             cells = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"

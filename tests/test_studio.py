@@ -273,3 +273,163 @@ def test_stopping_while_the_image_is_drawn_writes_nothing_to_a_closed_page(sessi
         studio.stop()
         time.sleep(0.5)  # a drawing stop() did not wait for ends here
     assert not [w for w in caught if "closed connection" in str(w.message)]
+
+
+@pytest.fixture(scope="module")
+def guarded_studio(session, tmp_path_factory):
+    """A running studio that also lets in one extra origin, exporting to a folder of its
+    own (not named like a package: ``studio`` would shadow the package in the tests)."""
+    from studio.app import Studio
+
+    exports = tmp_path_factory.mktemp("box") / "exports"
+    running = Studio(session, port=_free_port(), out=exports,
+                     allow_origins=("http://tools.example:9000",))
+    running.playing.value = False
+    yield running
+    running.stop()
+
+
+def _viser_subprotocol() -> str:
+    import viser
+
+    return f"viser-v{viser.__version__}"
+
+
+def _raw_handshake(port: int, origin: str) -> bytes:
+    """A websocket handshake with ``Origin: origin`` over a plain socket: every byte the
+    server sends until it closes the connection (or 3 s pass)."""
+    import base64
+    import socket
+
+    key = base64.b64encode(os.urandom(16)).decode()
+    request = (f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+               f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+               f"Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: {_viser_subprotocol()}"
+               f"\r\nOrigin: {origin}\r\n\r\n")
+    received = b""
+    with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
+        sock.sendall(request.encode())
+        try:
+            while chunk := sock.recv(65536):
+                received += chunk
+        except TimeoutError:
+            pass
+    return received
+
+
+def test_a_foreign_origin_gets_403_and_no_gui_message(guarded_studio, caplog):
+    """Cross-site WebSocket hijacking: a page at http://evil.example opening the studio's
+    websocket is answered 403, and nothing follows the answer (no GUI state)."""
+    import websockets.sync.client
+    from websockets.exceptions import InvalidStatus
+
+    port = guarded_studio.port
+    refused = guarded_studio.guard.refused
+    with caplog.at_level("WARNING", logger="studio.origin"):
+        raw = _raw_handshake(port, "http://evil.example")
+        with pytest.raises(InvalidStatus) as error:
+            websockets.sync.client.connect(f"ws://127.0.0.1:{port}", origin="http://evil.example",
+                                           subprotocols=[_viser_subprotocol()], open_timeout=10)
+    head, _, body = raw.partition(b"\r\n\r\n")
+    assert head.startswith(b"HTTP/1.1 403"), raw[:200]
+    length = int(next(line.split(b":")[1] for line in head.split(b"\r\n")
+                      if line.lower().startswith(b"content-length")))
+    assert len(body) == length and b"Forbidden" in body  # the 403's text, then nothing
+    assert error.value.response.status_code == 403
+    assert guarded_studio.guard.refused == refused + 2
+    assert "http://evil.example" in caplog.text
+
+
+@pytest.mark.parametrize("origin", ["http://127.0.0.1:{port}", "http://localhost:{port}",
+                                    "http://tools.example:9000"])
+def test_the_studios_own_origin_gets_the_gui(guarded_studio, origin):
+    import websockets.sync.client
+
+    port = guarded_studio.port
+    with websockets.sync.client.connect(f"ws://127.0.0.1:{port}",
+                                        origin=origin.format(port=port),
+                                        subprotocols=[_viser_subprotocol()],
+                                        open_timeout=10) as ws:
+        message = ws.recv(timeout=30)
+    assert isinstance(message, bytes) and len(message) > 0  # viser's GUI state
+
+
+def test_page_exports_stay_in_the_folder(guarded_studio):
+    """The page's export field: a refused name writes nothing (the page says why), a
+    plain name lands in the folder, a second export of it gets a suffix."""
+    from upm.motion.amc import read_amc
+
+    box = guarded_studio.exports.root
+    outside = box.parent
+    for name in ("../x.amc", str(outside / "abs.amc"), "a/b.amc", "x.txt"):
+        guarded_studio.amc_path.value = name
+        assert guarded_studio.export() is None
+        assert "export refused" in guarded_studio.report.content
+    assert sorted(p.name for p in outside.rglob("*")) == []
+    guarded_studio.amc_path.value = "take.bvh"
+    first = guarded_studio.export()
+    guarded_studio.amc_path.value = "take.amc"
+    second, third = guarded_studio.export(), guarded_studio.export()
+    assert sorted(p.name for p in box.iterdir()) == ["take-1.amc", "take.amc", "take.bvh"]
+    assert (first, second, third) == tuple(str(box / n) for n in
+                                           ("take.bvh", "take.amc", "take-1.amc"))
+    result = guarded_studio.scene.result
+    assert read_amc(third, result.motion.skeleton).n_frames == result.motion.n_frames
+
+
+def test_a_second_physics_check_while_one_runs_is_refused(guarded_studio, monkeypatch):
+    import threading
+
+    import studio.session
+
+    started, release = threading.Event(), threading.Event()
+    calls = []
+
+    def slow_check(model, result):
+        calls.append(result.method)
+        started.set()
+        release.wait(60)
+        return [{"part": "all", "valid_pct": 100.0}]
+
+    monkeypatch.setattr(studio.session, "physics_check", slow_check)
+    assert guarded_studio.start_check()
+    assert started.wait(30)
+    assert not guarded_studio.start_check()  # the button again
+    assert "already running" in guarded_studio.report.content
+    assert guarded_studio.check() is None  # the server-side call too
+    release.set()
+    for _ in range(600):  # the first check's thread lets go
+        if not guarded_studio._checking.locked():
+            break
+        threading.Event().wait(0.05)
+    assert "valid_pct" in guarded_studio.report.content
+    assert calls == [guarded_studio.scene.result.method]
+    assert guarded_studio.check() == [{"part": "all", "valid_pct": 100.0}]
+    assert len(calls) == 2
+
+
+def test_a_non_loopback_host_is_warned_about(tmp_path, capsys):
+    from upm.cli import main
+
+    assert main(["studio", "--host", "0.0.0.0", "--data", str(tmp_path / "none")]) == 2
+    err = capsys.readouterr().err
+    assert "warning" in err and "anyone who can reach" in err
+    assert "ssh -L 8080:127.0.0.1:8080" in err
+    assert main(["studio", "--data", str(tmp_path / "none")]) == 2
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_no_studio_runs_without_its_origin_check(session, monkeypatch):
+    """A viser that started its websocket server another way would leave the check out:
+    the studio stops that server and refuses to run."""
+    import contextlib
+    import socket
+
+    import studio.app
+
+    monkeypatch.setattr(studio.app, "guarded_viser", lambda guard: contextlib.nullcontext())
+    port = _free_port()
+    with pytest.raises(RuntimeError, match="unguarded"):
+        studio.app.Studio(session, port=port)
+    with socket.socket() as sock:  # the port is free again: the server was stopped
+        sock.bind(("127.0.0.1", port))

@@ -31,10 +31,14 @@ class BenchContext:
         The CMU clips.
     quick : bool
         Fewer repetitions and smaller inputs (used by the test suite).
+    soak_s : float or None
+        Simulated seconds of the soak (``upm bench --soak-s``; None: its default, an
+        hour, or a few seconds with ``quick``).
     """
 
     data_dir: Path
     quick: bool = False
+    soak_s: float | None = None
 
 
 def timeit_best(fn: Callable[[], object], repeat: int = 5, number: int = 1) -> float:

@@ -20,12 +20,16 @@ def configure(parser) -> None:
                         help="run only these benchmarks (default: all)")
     parser.add_argument("--quick", action="store_true",
                         help="fewer repetitions and smaller inputs (rougher figures)")
+    parser.add_argument("--soak-s", type=float, default=None, metavar="SECONDS",
+                        help="simulated seconds of the soak (the walking sequence looped, root "
+                        "free; default 3600, with --quick 4)")
     parser.add_argument("--out", metavar="FILE.json", default=None,
                         help="also write the JSON to this file")
 
 
 def run(args) -> int:
     import json
+    import math
     import platform
     import sys
 
@@ -38,13 +42,15 @@ def run(args) -> int:
     from upm.core.progress import progress
     from upm.motion.catalog import Catalog
 
+    if args.soak_s is not None and not (args.soak_s > 0 and math.isfinite(args.soak_s)):
+        raise UsageError(f"--soak-s {args.soak_s}: give a positive number of seconds")
     catalog = Catalog(args.data)
     modules = discover()
     names = args.only or list(modules)
     unknown = [n for n in names if n not in modules]
     if unknown:
         raise UsageError(f"no benchmark {unknown[0]!r} (known: {', '.join(modules)})")
-    context = BenchContext(data_dir=catalog.root, quick=args.quick)
+    context = BenchContext(data_dir=catalog.root, quick=args.quick, soak_s=args.soak_s)
     report = {
         "schema": 1,
         "machine": {"python": platform.python_version(), "processor": platform.machine(),
