@@ -116,9 +116,23 @@ class Studio:
         self._curve_ready = threading.Condition()
         threading.Thread(target=self._curve_worker, daemon=True).start()
         self.apply_gui()
-        centre_m = self.scene.geom_pos_m[:, 0].mean(axis=0)
-        self.server.initial_camera.look_at = (centre_m[0], centre_m[1], 0.9)
-        self.server.initial_camera.position = (centre_m[0] + 3.5, centre_m[1] - 3.5, 2.2)
+        self.frame_camera()
+
+    def frame_camera(self) -> None:
+        """Point the initial view at the motion and come close enough that it fills the
+        view: the larger of the body's height (with a margin) and the ground it covers."""
+        import math
+
+        pos = self.scene.geom_pos_m.reshape(-1, 3)
+        low, high = pos.min(axis=0), pos.max(axis=0)
+        centre = (low + high) / 2.0
+        extent = max(1.3 * float(high[2] - low[2]), float(max(high[:2] - low[:2])))
+        fov = float(getattr(self.server.initial_camera, "fov", 1.3) or 1.3)
+        distance = 1.15 * extent / 2.0 / math.tan(fov / 2.0)
+        direction = np.array([1.0, -1.0, 0.35]) / np.linalg.norm([1.0, -1.0, 0.35])
+        self.server.initial_camera.look_at = tuple(float(v) for v in centre)
+        self.server.initial_camera.position = tuple(float(v) for v in centre
+                                                    + distance * direction)
 
     def _build_humanoid(self, model) -> None:
         """Capsule meshes of ``model`` (and their ghosts) in the scene, replacing any drawn

@@ -68,7 +68,8 @@ class Session:
         self._clips: dict[str, object] = {}
         self.a_frame = self.clip(clip1).n_frames - 1
         self.b_frame = 0
-        self.method = "linear"
+        # a map given: start on the method it serves (the README's `upm studio --map M`)
+        self.method = _map_method(map_path) if map_path else "linear"
         self.compare_method: str | None = None
         self.alpha = 0.5
         self.frames = 20
@@ -240,3 +241,16 @@ def physics_check(model, result, tracking_modes=("driven",)) -> list[dict]:
                         window_meta=[{"method": result.method}],
                         tracking_modes=tuple(tracking_modes))
     return summary_rows(report)
+
+
+def _map_method(map_path) -> str:
+    """The method a saved map serves: "som" for a SOM map, else "upm" (read without
+    unpickling; an unreadable file is left to the first transition to report)."""
+    from upm.core.errors import UpmError
+    from upm.maps.npz_file import read_map_arrays, text_field
+
+    try:
+        kind = text_field(read_map_arrays(map_path), "kind", map_path)
+    except (UpmError, OSError, ValueError):
+        return "upm"
+    return "som" if kind == "som" else "upm"

@@ -128,3 +128,39 @@ def test_a_bad_range_model_is_a_one_line_error(tmp_path, data_dir, capsys):
     bad.write_text('{"ranges": {"ltibia.flexion": [10]}}')
     assert main(["check", "02_01", "--data", str(data_dir), "--limits", str(bad)]) == 2
     assert "ltibia.flexion must be [low, high]" in capsys.readouterr().err
+
+
+def test_check_reads_a_bvh_as_convert_does(data_dir, tmp_path, capsys):
+    """A BVH named after a clip goes onto that clip's subject (CMU's 31-joint naming keeps
+    the ASF's rotations), so it scores as the clip does; --asf puts it on a given ASF; a
+    missing file is a one-line error."""
+    bvh = data_dir.parent / "bvh" / "05_11.bvh"
+    if not bvh.is_file():
+        pytest.skip(f"no BVH at {bvh}")
+    assert main(["check", str(bvh), "--data", str(data_dir), "--json", "--no-dynamics"]) == 0
+    from_bvh = json.loads(capsys.readouterr().out)["totals"]["kinematic"]
+    assert main(["check", "05_11", "--data", str(data_dir), "--json", "--no-dynamics"]) == 0
+    from_clip = json.loads(capsys.readouterr().out)["totals"]["kinematic"]
+    assert from_bvh["frames"] == from_clip["frames"] == 591
+    assert abs(from_bvh["valid_frames"] - from_clip["valid_frames"]) <= 3
+    assert main(["check", str(bvh), "--asf", str(data_dir / "05" / "05.asf"), "--data",
+                 str(data_dir), "--json", "--no-dynamics"]) == 0
+    assert json.loads(capsys.readouterr().out)["motion"]["skeleton"] == "05.asf"
+    assert main(["check", str(tmp_path / "none.bvh"), "--data", str(data_dir)]) == 2
+    assert "none.bvh: no such file" in capsys.readouterr().err
+
+
+def test_check_text_names_rule_frame_and_amount_and_groups_by_cause(data_dir, capsys):
+    """Without --json: a table of the rules broken (frames, peak and its frame, the mean
+    over its own frames), the bodies interpenetrating, and the invalid frames by cause,
+    every run listed."""
+    assert main(["check", "83_26", "--data", str(data_dir), "--no-dynamics"]) == 0
+    out = capsys.readouterr().out
+    assert "rule broken            frames  peak deg  at frame  mean deg (its frames)" in out
+    row = next(line for line in out.splitlines() if "lfoot.plantarflexion" in line)
+    count, peak, frame, mean = row.split()[1:]
+    assert int(count) == 24 and float(peak) > 50 and 0 <= int(frame) < 522
+    assert float(mean) <= float(peak)
+    assert "over those frames" in out and "over all" in out
+    assert "invalid frames: 100, by cause" in out
+    assert "    beyond the range         100: " in out and "more runs" not in out

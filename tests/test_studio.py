@@ -433,3 +433,30 @@ def test_no_studio_runs_without_its_origin_check(session, monkeypatch):
         studio.app.Studio(session, port=port)
     with socket.socket() as sock:  # the port is free again: the server was stopped
         sock.bind(("127.0.0.1", port))
+
+
+def test_a_map_starts_the_studio_on_its_method_and_the_view_frames_the_body(
+        catalog, synthetic_maps, tmp_path, session):
+    """`upm studio --map M` starts on the method the map serves (upm, or som for a SOM
+    map), not linear; the initial view looks at the motion from close enough that the
+    body fills it."""
+    from types import SimpleNamespace
+
+    from studio.app import Studio
+    from studio.session import Session
+
+    for kind in ("upm", "som"):
+        path = tmp_path / f"{kind}.npz"
+        synthetic_maps[kind].save(path)
+        assert Session(catalog, "02_01", "02_03", map_path=path).method == kind
+    assert Session(catalog, "02_01", "02_03").method == "linear"
+    camera = SimpleNamespace(fov=1.3, look_at=None, position=None)
+    scene = session.recompute()
+    stub = SimpleNamespace(scene=scene, server=SimpleNamespace(initial_camera=camera))
+    Studio.frame_camera(stub)
+    pos = scene.geom_pos_m.reshape(-1, 3)
+    centre = (pos.min(axis=0) + pos.max(axis=0)) / 2
+    np.testing.assert_allclose(camera.look_at, centre)
+    distance = np.linalg.norm(np.subtract(camera.position, camera.look_at))
+    height = pos[:, 2].max() - pos[:, 2].min()
+    assert 1.0 < distance < 6.0 and distance < 4.0 * max(height, 1.0)

@@ -13,6 +13,9 @@ dynamics, in body weights and body weight x stature).
 Give the motion as
 
   MOTION.amc --asf SKEL.asf [--fps 120]   an AMC file and its skeleton
+  MOTION.bvh [--asf SKEL.asf] [--fps F]   a BVH file, read as 'upm convert' reads it: onto
+                                          --asf, else onto the subject of the clip it is
+                                          named after, else onto the generic adult
   CLIP or CLIP@A:B                        a clip (frames A to B-1) under --data
   --split train|test|all                  every clip of a split: the calibration table
 
@@ -30,9 +33,10 @@ HELP = "physical validity of a motion: joint limits, self-collision, floor, dyna
 
 def configure(parser) -> None:
     parser.add_argument("motions", nargs="*", metavar="MOTION",
-                        help="an AMC file (with --asf) or clips such as 02_01 or 02_01@0:120")
+                        help="an AMC file (with --asf), a BVH file, or clips such as 02_01 "
+                             "or 02_01@0:120")
     parser.add_argument("--asf", metavar="SKEL.asf", default=None,
-                        help="the skeleton of an AMC file")
+                        help="the skeleton of an AMC file, or the one to put a BVH on")
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate of an AMC file (default 120; clips use clips.csv)")
     parser.add_argument("--split", choices=["train", "test", "all"], default=None,
@@ -58,6 +62,9 @@ def _motions(args):
         raise UsageError("give motions or --split, not both")
     if not args.split and not args.motions:
         raise UsageError("give a motion (MOTION.amc --asf SKEL.asf, or a CLIP) or --split")
+    bvh = [m for m in args.motions if m.lower().endswith(".bvh")]
+    if bvh:
+        return [_bvh_motion(args, bvh)]
     amc = [m for m in args.motions if m.lower().endswith(".amc")]
     if amc:
         if len(args.motions) != 1:
@@ -79,7 +86,7 @@ def _motions(args):
     for ref in args.motions:
         if Path(ref).suffix:
             raise UsageError(f"{ref}: not a motion upm check reads: give an .amc file "
-                             "(with --asf SKEL.asf) or a clip such as 02_01")
+                             "(with --asf SKEL.asf), a .bvh file or a clip such as 02_01")
     if args.asf or args.fps:
         raise UsageError("--asf and --fps go with an AMC file, not with clips")
     from upm.motion.catalog import Catalog, parse_clip_ref
@@ -97,6 +104,38 @@ def _motions(args):
             motion = motion.replace(name=str(clip))
         out.append((motion, catalog_model_path(catalog, clip.name), catalog.info(clip.name)))
     return out
+
+
+def _bvh_motion(args, files):
+    """(motion, model_path, None) of one BVH file, read onto an ASF as upm convert does."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from humanoid_xml import catalog_model_path, default_model_path, subject_model_path
+    from upm.bvh import read_bvh
+    from upm.commands.convert import _clip_named, _motion_of_bvh
+    from upm.core.errors import UsageError
+
+    if len(args.motions) != 1:
+        raise UsageError("check one BVH file at a time")
+    path = Path(files[0])
+    if not path.is_file():
+        raise UsageError(f"{path}: no such file")
+    for given in [args.asf] if args.asf else []:
+        if not Path(given).is_file():
+            raise UsageError(f"{given}: no such file")
+    if args.fps is not None and not 0 < args.fps <= 10000:
+        raise UsageError(f"--fps must be in (0, 10000], not {args.fps:g}")
+    options = SimpleNamespace(skeleton=args.asf, fps=args.fps, map=None, keep_first=False,
+                              data=args.data)
+    motion = _motion_of_bvh(options, read_bvh(path), path)
+    if args.asf:
+        model_path = subject_model_path(args.asf)
+    else:
+        clip = _clip_named(args.data, path.stem)
+        model_path = (catalog_model_path(clip[0], clip[1].name) if clip is not None
+                      else default_model_path())
+    return motion, model_path, None
 
 
 def run(args) -> int:
@@ -228,9 +267,12 @@ def _print_one(report: dict) -> None:
     print(f"{m['name']}: {m['frames']} frames at {m['fps']:g} fps on a {m['mass_kg']:.1f} kg, "
           f"{m['stature_m']:.2f} m humanoid ({m['skeleton']})")
     print(f"  valid frames          {k['valid_frames']:6d} ({k['valid_pct']:.1f} %)")
+    beyond = [r["limit_excess_max_deg"] for r in report["frames"] if r["limit_violation"]]
+    over_beyond = sum(beyond) / len(beyond) if beyond else 0.0
     print(f"  beyond the range      {k['limit_violation_frames']:6d} "
-          f"({k['limit_violation_pct']:.1f} %), excess per frame mean "
-          f"{k['limit_excess_mean_deg']:.2f} deg, peak {k['limit_excess_peak_deg']:.2f} deg")
+          f"({k['limit_violation_pct']:.1f} %), largest excess per frame: mean "
+          f"{over_beyond:.2f} deg over those frames ({k['limit_excess_mean_deg']:.2f} over "
+          f"all), peak {k['limit_excess_peak_deg']:.2f} deg")
     print(f"  self-interpenetration {k['self_collision_frames']:6d} ({k['self_collision_pct']:.1f} "
           f"%), deepest {k['self_depth_peak_mm']:.1f} mm, {k['self_excess_peak_mm']:.1f} mm "
           f"beyond its allowance; touching only {k['self_touch_frames']} frames")
@@ -244,19 +286,46 @@ def _print_one(report: dict) -> None:
               f"{d['residual_force_bw_peak']:.3f} body weights; torque mean "
               f"{d['residual_torque_bwh_mean']:.3f}, peak {d['residual_torque_bwh_peak']:.3f} "
               "body weight x stature")
-    if k["dofs"]:
-        top = ", ".join(f"{name} {n}" for name, n in list(k["dofs"].items())[:6])
-        print(f"  DOFs beyond limits (frames): {top}")
-    if k["pairs"]:
-        top = ", ".join(f"{name} {n}" for name, n in list(k["pairs"].items())[:6])
-        print(f"  self-collision pairs (frames): {top}")
-    invalid = [r["frame"] for r in report["frames"] if not r["valid"]]
+    records = report["frames"]
+    rules = _peaks(records, "limit_dofs")
+    if rules:
+        print("\n  rule broken            frames  peak deg  at frame  mean deg (its frames)")
+        for name, (count, peak, frame, mean) in rules.items():
+            print(f"  {name:22s} {count:6d}  {peak:8.2f}  {frame:8d}  {mean:8.2f}")
+    pairs = _peaks(records, "self_pairs")
+    if pairs:
+        print("\n  bodies interpenetrating  frames  deepest mm  at frame")
+        for name, (count, peak, frame, _) in pairs.items():
+            print(f"  {name:24s} {count:6d}  {peak:10.1f}  {frame:8d}")
+    causes = (("beyond the range", "limit_violation"),
+              ("self-interpenetration", "self_collision"),
+              ("through the floor", "floor_penetration"))
+    invalid = [r["frame"] for r in records if not r["valid"]]
     if invalid:
-        print(f"  invalid frames: {_ranges(invalid)}")
+        print(f"\n  invalid frames: {len(invalid)}, by cause (a frame may have several):")
+        for label, key in causes:
+            frames = [r["frame"] for r in records if r[key]]
+            if frames:
+                print(f"    {label:22s} {len(frames):5d}: {_ranges(frames)}")
 
 
-def _ranges(frames: list[int], limit: int = 12) -> str:
-    """``0-35, 40, 52-60, ...`` (at most ``limit`` ranges)."""
+def _peaks(records: list[dict], key: str) -> dict[str, tuple[int, float, int, float]]:
+    """Per name in the frame records' ``key`` dicts: (frames, peak, its frame, mean over
+    those frames), most frames first."""
+    seen: dict[str, list] = {}
+    for r in records:
+        for name, value in r[key].items():
+            row = seen.setdefault(name, [0, -1.0, 0, 0.0])
+            row[0] += 1
+            row[3] += value
+            if value > row[1]:
+                row[1], row[2] = value, r["frame"]
+    order = sorted(seen.items(), key=lambda kv: (-kv[1][0], kv[0]))
+    return {name: (n, peak, frame, total / n) for name, (n, peak, frame, total) in order}
+
+
+def _ranges(frames: list[int]) -> str:
+    """``0-35, 40, 52-60``: every run of consecutive frames."""
     runs, start, prev = [], frames[0], frames[0]
     for f in frames[1:]:
         if f != prev + 1:
@@ -264,5 +333,4 @@ def _ranges(frames: list[int], limit: int = 12) -> str:
             start = f
         prev = f
     runs.append((start, prev))
-    text = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs[:limit])
-    return text + (f", ... ({len(runs) - limit} more runs)" if len(runs) > limit else "")
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
