@@ -113,7 +113,7 @@ def _bvh_motion(args, files):
 
     from humanoid_xml import catalog_model_path, default_model_path, subject_model_path
     from upm.bvh import read_bvh
-    from upm.commands.convert import _clip_named, _motion_of_bvh
+    from upm.commands.convert import clip_named, motion_of_bvh
     from upm.core.errors import UsageError
 
     if len(args.motions) != 1:
@@ -128,11 +128,11 @@ def _bvh_motion(args, files):
         raise UsageError(f"--fps must be in (0, 10000], not {args.fps:g}")
     options = SimpleNamespace(skeleton=args.asf, fps=args.fps, map=None, keep_first=False,
                               data=args.data)
-    motion = _motion_of_bvh(options, read_bvh(path), path)
+    motion = motion_of_bvh(options, read_bvh(path), path)
     if args.asf:
         model_path = subject_model_path(args.asf)
     else:
-        clip = _clip_named(args.data, path.stem)
+        clip = clip_named(args.data, path.stem)
         model_path = (catalog_model_path(clip[0], clip[1].name) if clip is not None
                       else default_model_path())
     return motion, model_path, None

@@ -103,7 +103,7 @@ def run(args) -> int:
             write_bvh(args.out, bvh)
             print(f"wrote {args.out}: {bvh.n_frames} frames, {bvh.skeleton.n_joints} joints")
             return 0
-        motion = _motion_of_bvh(args, bvh, source)
+        motion = motion_of_bvh(args, bvh, source)
     elif suffix == ".amc":
         if not args.skeleton:
             raise UsageError(f"{source}: an AMC file needs its skeleton: --skeleton ASF")
@@ -131,14 +131,14 @@ def run(args) -> int:
     return 0
 
 
-def _motion_of_bvh(args, bvh, source):
+def motion_of_bvh(args, bvh, source):
     """A BVH onto an ASF skeleton as a Motion (see the module docstring for the rules)."""
     import sys
 
     from upm.bvh import motion_from_bvh
     from upm.bvh.retarget import CMU_31, retarget_cmu
 
-    clip = _clip_named(args.data, source.stem)
+    clip = clip_named(args.data, source.stem)
     if args.skeleton:
         from upm.motion.asf import read_asf
 
@@ -167,7 +167,7 @@ def _motion_of_bvh(args, bvh, source):
                           drop_first=False if args.keep_first else None, name=source.stem)
 
 
-def _clip_named(data, stem: str):
+def clip_named(data, stem: str):
     """``(catalog, clip info)`` of the clip a BVH file is named after: its stem is the
     clip's name, or starts with it followed by ``_`` or ``-`` (the longest such name);
     None when there is no such clip or no readable data directory."""

@@ -40,7 +40,8 @@ JOINT_KIND: dict[str, str] = {
 
 #: The world axes at rest (the ASF's): x left, y up, z forward.
 LEFT, UP, FORWARD = np.eye(3)
-_MIRROR = np.diag([-1.0, 1.0, 1.0])
+#: Reflection through the sagittal plane (x -> -x): right-side joints are mirrored by it.
+SAGITTAL_MIRROR = np.diag([-1.0, 1.0, 1.0])
 
 #: Hinge axes (left side, world rest frame), signed so that a positive angle is flexion
 #: for the knee and elbow (the shank swings back; the forearm, arm held out sideways with
@@ -84,7 +85,7 @@ def joint_rotations(skeleton: Skeleton, posture_deg) -> np.ndarray:
     c = np.stack([skeleton.axis_matrices[skeleton.bone_index(j)] for j in JOINTS])
     local = c @ m @ np.swapaxes(c, -1, -2)
     right = np.array([is_right(j) for j in JOINTS])
-    local[:, right] = _MIRROR @ local[:, right] @ _MIRROR
+    local[:, right] = SAGITTAL_MIRROR @ local[:, right] @ SAGITTAL_MIRROR
     return local
 
 
@@ -92,7 +93,7 @@ def rest_direction(skeleton: Skeleton, joint: str) -> np.ndarray:
     """A bone's unit rest direction, world frame, mirrored for right-side bones, (3,)."""
     d = np.asarray(skeleton.directions[skeleton.bone_index(joint)], dtype=float)
     if is_right(joint):
-        d = _MIRROR @ d
+        d = SAGITTAL_MIRROR @ d
     return d / max(np.linalg.norm(d), 1e-12)
 
 

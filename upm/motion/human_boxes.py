@@ -15,9 +15,9 @@ from __future__ import annotations
 import numpy as np
 
 from upm.motion.anatomy import (
-    _MIRROR,
     HINGE_AXIS,
     JOINT_KIND,
+    SAGITTAL_MIRROR,
     ball_angles_deg,
     base_name,
     euler_angles_deg,
@@ -48,7 +48,7 @@ def _joint_inside(skeleton: Skeleton, joint: str, angles_deg: np.ndarray) -> np.
     c = skeleton.axis_matrices[skeleton.bone_index(joint)]
     local = c @ euler_to_matrix(angles_deg, "XYZ") @ c.T
     if is_right(joint):
-        local = _MIRROR @ local @ _MIRROR
+        local = SAGITTAL_MIRROR @ local @ SAGITTAL_MIRROR
     kind = JOINT_KIND[joint]
     if kind == "ball":
         value = ball_angles_deg(local, rest_direction(skeleton, joint), joint)
@@ -67,7 +67,7 @@ def _hinge_box(skeleton: Skeleton, joint: str) -> tuple[float, float]:
     b = skeleton.bone_index(joint)
     axis = skeleton.axis_matrices[b][:, 0]
     if is_right(joint):
-        axis = -_MIRROR @ axis
+        axis = -SAGITTAL_MIRROR @ axis
     low, high = rule_box(columns_rule(joint, "flexion"))
     if axis @ HINGE_AXIS[base_name(joint)] < 0:
         low, high = -high, -low

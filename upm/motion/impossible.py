@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.motion.anatomy import _MIRROR, HINGE_AXIS, base_name, is_right, joint_rotations
+from upm.motion.anatomy import HINGE_AXIS, SAGITTAL_MIRROR, base_name, is_right, joint_rotations
 from upm.motion.kinematics import global_transforms
 from upm.motion.skeleton import JOINTS, Skeleton
 from upm.ops.rotations import matrix_to_euler_deg, rotation_exp
@@ -34,7 +34,7 @@ def _set_hinge(skeleton: Skeleton, posture: np.ndarray, joint: str, angle_deg: f
     b = skeleton.bone_index(joint)
     axis = skeleton.axis_matrices[b][:, 0]
     if is_right(joint):  # a rotation axis mirrors as a pseudovector: -S a
-        axis = -_MIRROR @ axis
+        axis = -SAGITTAL_MIRROR @ axis
     sign = float(np.sign(axis @ HINGE_AXIS[base_name(joint)])) or 1.0
     posture[:, 3 * JOINTS.index(joint)] = angle_deg * sign
 
@@ -42,7 +42,7 @@ def _set_hinge(skeleton: Skeleton, posture: np.ndarray, joint: str, angle_deg: f
 def _set_rotation(skeleton: Skeleton, posture: np.ndarray, joint: str, local: np.ndarray):
     """Set a 3-DOF joint's rotation relative to its parent ((T, 3, 3), mirrored frame)."""
     if is_right(joint):
-        local = _MIRROR @ local @ _MIRROR
+        local = SAGITTAL_MIRROR @ local @ SAGITTAL_MIRROR
     c = skeleton.axis_matrices[skeleton.bone_index(joint)]
     m = c.T @ local @ c
     j = 3 * JOINTS.index(joint)
