@@ -26,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import signal
 import threading
+import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -98,6 +99,7 @@ class LocalExecutor:
 
         methods = multiprocessing.get_all_start_methods()
         context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+        others = set(multiprocessing.active_children())
         pool = ProcessPoolExecutor(max_workers=min(self.workers, len(tasks)),
                                    mp_context=context, initializer=self.initializer,
                                    initargs=self.initargs)
@@ -109,22 +111,32 @@ class LocalExecutor:
                 except Exception as exc:
                     yield Outcome(futures[future], error=_describe(exc))
         except BaseException:  # interrupted, or the consumer stopped early
-            _kill_pool(pool)
+            _kill_pool(pool, others)
             raise
         pool.shutdown(wait=True)
 
 
-def _kill_pool(pool) -> None:
+def _kill_pool(pool, others=frozenset()) -> None:
     """Stop a process pool now: queued tasks cancelled, running ones killed (a plain
-    shutdown would wait for every task already handed to a worker)."""
+    shutdown would wait for every task already handed to a worker). ``others``: the
+    child processes that were there before the pool (left alone)."""
+    import multiprocessing
+
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        with contextlib.suppress(Exception):
-            process.kill()
-    for process in processes:
-        with contextlib.suppress(Exception):
-            process.join(timeout=5)
+    # the pool's manager thread may still start a worker while it shuts down, one the
+    # pool no longer lists: every child process started since the pool, until none is left
+    for _ in range(10):
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.kill()
+        for process in processes:
+            with contextlib.suppress(Exception):
+                process.join(timeout=5)
+        processes = [p for p in multiprocessing.active_children() if p not in others]
+        if not processes:
+            break
+        time.sleep(0.05)
 
 
 class RayExecutor:
