@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.checks.tissue import allowed_depth_m
+from controller.checks.tissue import allowance_table
 from upm.transitions.feasible_keys import register_kinematic_checker
 
 #: Root height while checking postures, metres: far above the floor, so that only
@@ -52,10 +52,7 @@ class HumanoidChecker:
         names = [mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_BODY, b)
                  for b in range(self.model.nbody)]
         self._pair_names = np.array([[f"{a}-{b}" for b in names] for a in names], dtype=object)
-        ids = np.arange(len(names))
-        first, second = np.meshgrid(ids, ids, indexing="ij")
-        self._allowed_m = allowed_depth_m(names, first.ravel(), second.ravel()).reshape(
-            len(names), len(names))
+        self._allowed_m = allowance_table(names)
         self._geom_body = np.asarray(self.model.geom_bodyid)
 
     def self_collision_pairs(self, postures_deg) -> list[frozenset]:

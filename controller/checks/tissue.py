@@ -93,6 +93,26 @@ def allowance(depths_m, margin_m: float = MARGIN_M) -> float:
     return round(min(max(deepest + margin_m, TOUCH_M), MAX_TISSUE_M), 4)
 
 
+def allowance_table(body_names) -> np.ndarray:
+    """The allowed depth between every two bodies of a model, (B, B) metres: row 0 (the
+    world) holds each body's floor allowance. Built once per set of body names."""
+    names = tuple(body_names)
+    table = _TABLES.get(names)
+    if table is None:
+        classes = [BODY_CLASS.get(n, n) for n in names]
+        table = np.full((len(names), len(names)), TOUCH_M)
+        for a, first in enumerate(names):
+            for b, second in enumerate(names):
+                table[a, b] = (FLOOR_ALLOWANCE_M.get(classes[b], TOUCH_M) if a == 0 else
+                               SELF_ALLOWANCE_M.get(class_pair(first, second), TOUCH_M))
+        table.setflags(write=False)
+        _TABLES[names] = table
+    return table
+
+
+_TABLES: dict[tuple, np.ndarray] = {}
+
+
 def allowed_depth_m(body_names, body1, body2) -> np.ndarray:
     """The allowed depth of each contact row, (K,) metres.
 
@@ -103,11 +123,5 @@ def allowed_depth_m(body_names, body1, body2) -> np.ndarray:
     body1, body2 : ndarray of int, shape (K,)
         Each contact's bodies (``body1 == 0``: a floor contact).
     """
-    names = list(body_names)
-    out = np.empty(len(body1))
-    for k, (a, b) in enumerate(zip(body1, body2, strict=True)):
-        if a == 0:
-            out[k] = FLOOR_ALLOWANCE_M.get(BODY_CLASS.get(names[b], names[b]), TOUCH_M)
-        else:
-            out[k] = SELF_ALLOWANCE_M.get(class_pair(names[a], names[b]), TOUCH_M)
-    return out
+    return allowance_table(body_names)[np.asarray(body1, dtype=int),
+                                       np.asarray(body2, dtype=int)]

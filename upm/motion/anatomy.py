@@ -169,13 +169,25 @@ def anatomical_angles_deg(skeleton: Skeleton, posture_deg) -> dict[str, np.ndarr
         (T, 3) about x, y, z.
     """
     local = joint_rotations(skeleton, posture_deg)
-    out = {}
-    for j, joint in enumerate(JOINTS):
-        kind = JOINT_KIND[joint]
-        if kind == "hinge":
-            out[joint] = hinge_angle_deg(local[:, j], joint)
-        elif kind == "ball":
-            out[joint] = ball_angles_deg(local[:, j], rest_direction(skeleton, joint), joint)
-        else:
-            out[joint] = euler_angles_deg(local[:, j], joint)
-    return out
+    return {joint: joint_angles_deg(skeleton, joint, local[:, j])
+            for j, joint in enumerate(JOINTS)}
+
+
+def joint_angles_deg(skeleton: Skeleton, joint: str, local: np.ndarray) -> np.ndarray:
+    """One joint's anatomical angles from its (T, 3, 3) rotations (mirrored for a right
+    joint, as :func:`joint_rotations` gives them): (T,) for a hinge, (T, 3) otherwise."""
+    kind = JOINT_KIND[joint]
+    if kind == "hinge":
+        return hinge_angle_deg(local, joint)
+    if kind == "ball":
+        return ball_angles_deg(local, rest_direction(skeleton, joint), joint)
+    return euler_angles_deg(local, joint)
+
+
+def hinge_sign(skeleton: Skeleton, joint: str) -> float:
+    """+1 where a hinge joint's ASF rx turns it the anatomical way (:data:`HINGE_AXIS`),
+    -1 where it turns it the other way (a rotation axis mirrors as a pseudovector)."""
+    axis = skeleton.axis_matrices[skeleton.bone_index(joint)][:, 0]
+    if is_right(joint):
+        axis = -SAGITTAL_MIRROR @ axis
+    return -1.0 if axis @ HINGE_AXIS[base_name(joint)] < 0 else 1.0

@@ -15,24 +15,13 @@ from __future__ import annotations
 import numpy as np
 
 from upm.motion.anatomy import (
-    HINGE_AXIS,
     JOINT_KIND,
     SAGITTAL_MIRROR,
-    ball_angles_deg,
-    base_name,
-    euler_angles_deg,
+    hinge_sign,
     is_right,
-    rest_direction,
+    joint_angles_deg,
 )
-from upm.motion.human_rom import (
-    TWIST_MAX_ELEVATION_DEG,
-    allowed_elevation_deg,
-    box_excess_deg,
-    columns_rule,
-    euler_names,
-    rule_box,
-    swing_limits_deg,
-)
+from upm.motion.human_rom import columns_rule, joint_excess_deg, rule_box
 from upm.motion.skeleton import AXES, JOINTS, Skeleton, joint_dof_index
 from upm.ops.rotations import euler_to_matrix
 
@@ -49,29 +38,13 @@ def _joint_inside(skeleton: Skeleton, joint: str, angles_deg: np.ndarray) -> np.
     local = c @ euler_to_matrix(angles_deg, "XYZ") @ c.T
     if is_right(joint):
         local = SAGITTAL_MIRROR @ local @ SAGITTAL_MIRROR
-    kind = JOINT_KIND[joint]
-    if kind == "ball":
-        value = ball_angles_deg(local, rest_direction(skeleton, joint), joint)
-        swing = value[:, 0] - allowed_elevation_deg(value[:, 1], swing_limits_deg(joint))
-        twist = box_excess_deg(value[:, 2], *rule_box(f"{joint}.twist"))
-        twist = np.where(value[:, 0] <= TWIST_MAX_ELEVATION_DEG, twist, 0.0)
-        return (swing <= 0) & (twist <= 0)
-    value = euler_angles_deg(local, joint)
-    inside = np.ones(len(angles_deg), dtype=bool)
-    for k, axis in enumerate(euler_names(joint)):
-        inside &= box_excess_deg(value[:, k], *rule_box(f"{joint}.{axis}")) <= 0
-    return inside
+    excess = joint_excess_deg(joint, joint_angles_deg(skeleton, joint, local))
+    return np.all(np.stack(excess) <= 0, axis=0)
 
 
 def _hinge_box(skeleton: Skeleton, joint: str) -> tuple[float, float]:
-    b = skeleton.bone_index(joint)
-    axis = skeleton.axis_matrices[b][:, 0]
-    if is_right(joint):
-        axis = -SAGITTAL_MIRROR @ axis
     low, high = rule_box(columns_rule(joint, "flexion"))
-    if axis @ HINGE_AXIS[base_name(joint)] < 0:
-        low, high = -high, -low
-    return low, high
+    return (low, high) if hinge_sign(skeleton, joint) > 0 else (-high, -low)
 
 
 def human_dof_boxes(skeleton: Skeleton) -> np.ndarray:

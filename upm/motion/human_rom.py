@@ -235,22 +235,25 @@ def human_excess_deg(skeleton: Skeleton, posture_deg, ranges: dict | None = None
         Non-negative degrees, columns in :data:`RULES` order.
     """
     angles = anatomical_angles_deg(skeleton, posture_deg)
-    columns = []
-    for joint in JOINTS:
-        kind, value = JOINT_KIND[joint], angles[joint]
-        if kind == "hinge":
-            columns.append(box_excess_deg(value, *rule_box(columns_rule(joint, "flexion"),
-                                                              ranges)))
-        elif kind == "ball":
-            allowed = allowed_elevation_deg(value[:, 1], swing_limits_deg(joint, ranges))
-            columns.append(np.maximum(value[:, 0] - allowed, 0.0))
-            twist = box_excess_deg(value[:, 2], *rule_box(f"{joint}.twist", ranges))
-            columns.append(np.where(value[:, 0] <= TWIST_MAX_ELEVATION_DEG, twist, 0.0))
-        else:
-            for k, axis in enumerate(euler_names(joint)):
-                columns.append(box_excess_deg(value[:, k],
-                                              *rule_box(f"{joint}.{axis}", ranges)))
+    columns = [column for joint in JOINTS
+               for column in joint_excess_deg(joint, angles[joint], ranges)]
     return np.stack(columns, axis=-1)
+
+
+def joint_excess_deg(joint: str, angles_deg: np.ndarray, ranges: dict | None = None
+                     ) -> list[np.ndarray]:
+    """Degrees beyond each of one joint's rules, from its anatomical angles
+    (:func:`upm.motion.anatomy.joint_angles_deg`): a list of (T,) arrays, in rule order."""
+    kind, value = JOINT_KIND[joint], angles_deg
+    if kind == "hinge":
+        return [box_excess_deg(value, *rule_box(columns_rule(joint, "flexion"), ranges))]
+    if kind == "ball":
+        allowed = allowed_elevation_deg(value[:, 1], swing_limits_deg(joint, ranges))
+        twist = box_excess_deg(value[:, 2], *rule_box(f"{joint}.twist", ranges))
+        return [np.maximum(value[:, 0] - allowed, 0.0),
+                np.where(value[:, 0] <= TWIST_MAX_ELEVATION_DEG, twist, 0.0)]
+    return [box_excess_deg(value[:, k], *rule_box(f"{joint}.{axis}", ranges))
+            for k, axis in enumerate(euler_names(joint))]
 
 
 def columns_rule(joint: str, what: str) -> str:

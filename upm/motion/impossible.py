@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from upm.motion.anatomy import HINGE_AXIS, SAGITTAL_MIRROR, base_name, is_right, joint_rotations
+from upm.motion.anatomy import SAGITTAL_MIRROR, hinge_sign, is_right, joint_rotations
 from upm.motion.kinematics import global_transforms
 from upm.motion.skeleton import JOINTS, Skeleton
 from upm.ops.rotations import matrix_to_euler_deg, rotation_exp
@@ -30,13 +30,8 @@ FAMILIES: tuple[str, ...] = ("knee_hyperextension", "elbow_hyperextension",
 
 
 def _set_hinge(skeleton: Skeleton, posture: np.ndarray, joint: str, angle_deg: float):
-    """Set a 1-DOF joint to an anatomical angle (see :data:`HINGE_AXIS`)."""
-    b = skeleton.bone_index(joint)
-    axis = skeleton.axis_matrices[b][:, 0]
-    if is_right(joint):  # a rotation axis mirrors as a pseudovector: -S a
-        axis = -SAGITTAL_MIRROR @ axis
-    sign = float(np.sign(axis @ HINGE_AXIS[base_name(joint)])) or 1.0
-    posture[:, 3 * JOINTS.index(joint)] = angle_deg * sign
+    """Set a 1-DOF joint to an anatomical angle (see :data:`upm.motion.anatomy.HINGE_AXIS`)."""
+    posture[:, 3 * JOINTS.index(joint)] = angle_deg * hinge_sign(skeleton, joint)
 
 
 def _set_rotation(skeleton: Skeleton, posture: np.ndarray, joint: str, local: np.ndarray):
