@@ -33,6 +33,7 @@ from upm.transitions import (
     transition,
 )
 from upm.transitions.feasible import FeasibleKeys
+from upm.transitions.feasible_range import range_boxes_deg
 
 PROMISES = {"upm": "C1", "som": "C1", "classnn": "C1", "snap": "C1", "linear": "C0",
             "slerp": "C0", "inertialize": "C1", "spacetime": "C1", "feasible": "C1",
@@ -141,9 +142,9 @@ def test_joins_across_the_wrap(synthetic_catalog, method):
     window = result.window_posture_deg[:, dof]
     assert np.all((window >= -180.0) & (window < 180.0))  # wrapped, as documented
     if method == "feasible" and result.diagnostics["long_way_dofs"]:
-        # The short way passes the DOF's limit (the range widened by the ends' excess
+        # The short way passes the DOF's human-range box (widened by the ends' excess
         # still stops short of 180): feasible goes the long way, inside the range.
-        limits = before.skeleton.limits_deg[dof:dof + 1]
+        limits = range_boxes_deg(before.skeleton)[dof:dof + 1]
         ends = limit_excess_deg(np.array([[before.posture_deg[-1, dof]],
                                           [after.posture_deg[0, dof]]]), limits).max()
         assert limit_excess_deg(window[:, None], limits).max() <= ends + 1e-6

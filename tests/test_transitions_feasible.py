@@ -21,14 +21,18 @@ from tests.transition_data import (
     sources,
     window_edges,
 )
+from upm.motion.range_models import range_model
 from upm.transitions import make_problem, transition
 from upm.transitions.feasible import FeasibleKeys, allowed_range, long_way_turns
+from upm.transitions.feasible_range import range_boxes_deg
 
-#: A real pair beyond tests/transition_data.PAIRS, from the study's draw: the short way
-#: from A to B in rhumerus.rz leaves its range (A -73.7, B 158.4: beyond the +-90 limit,
-#: which widens the range to +-158.4 but not across 180), so the window must go the long
-#: way round.
-LONG_WAY = ("83_26", 432, "05_11", 23)
+#: A real pair beyond tests/transition_data.PAIRS, from a random draw: the short way from
+#: A to B in rfoot.rz leaves its human range's box ([-99.7, 99.7], widened by the ends'
+#: excess to about +-140 but not across 180), so the window must go the long way round.
+LONG_WAY = ("05_06", 682, "05_11", 215)
+#: A real pair whose UPM window breaks a coupled rule of the human range (the right
+#: shoulder) by 46 degrees beyond the ends, inside every per-DOF box.
+UPM_BEYOND_RULES = ("83_26", 432, "05_11", 23)
 
 
 def _pair(data_dir, spec, frames=40):
@@ -42,26 +46,33 @@ def _real_pairs(data_dir):
     return [pair(data_dir, i) for i in range(len(PAIRS))] + [_pair(data_dir, LONG_WAY)]
 
 
-def _added_excess_deg(result) -> np.ndarray:
-    """The study's added excess of the window frames, (L, 63): beyond the larger excess of
-    A and B, per DOF (controller.checks.validity)."""
+def _added_excess_deg(result, boxes=None) -> np.ndarray:
+    """The added excess of the window frames beyond per-DOF boxes (feasible's: the human
+    range's, by default), (L, 63): beyond the larger excess of A and B, per DOF
+    (controller.checks.validity)."""
     ends = result.motion.posture_deg[result.a_index:result.b_index + 1]
-    excess = limit_excess(ends, result.motion.skeleton.limits_deg)
+    boxes = range_boxes_deg(result.motion.skeleton) if boxes is None else boxes
+    excess = limit_excess(ends, boxes)
     return added_excess(excess, [slice(1, ends.shape[0] - 1)])[1:-1]
+
+
+def _added_rule_excess_deg(result) -> np.ndarray:
+    """The study's added excess of the window frames beyond the human range's rules
+    (coupled rules included), (L, R)."""
+    frames = result.motion.posture_deg[result.a_index:result.b_index + 1]
+    excess = range_model("human").excess_deg(result.motion.skeleton, frames)
+    return added_excess(excess, [slice(1, frames.shape[0] - 1)])[1:-1]
 
 
 def test_every_frame_in_range_joins_c1_and_key_collision_free(data_dir):
     feasible = sources(data_dir)["feasible"]
     long_way_seen = False
     for before, after in _real_pairs(data_dir):
-        limits = before.skeleton.limits_deg
-        declared = before.skeleton.declared
-        # Clip frames at a limit: CMU's clavicle rz sits on its limit in every frame.
         a = before.posture_deg[-1]
-        assert np.any(declared & ((np.abs(a - limits[:, 0]) < 1e-6)
-                                  | (np.abs(a - limits[:, 1]) < 1e-6)))
         result = transition("feasible", before, after, 20, 0.5, feasible)
         assert _added_excess_deg(result).max() <= 1e-6
+        if result.diagnostics["window_invalid_frames"] == 0:  # the rules hold as well
+            assert _added_rule_excess_deg(result).max() <= 1e-6
         (c0_a, c1_a), (c0_b, c1_b) = window_edges(result, feasible_limit_turns(before, after))
         assert max(c0_a, c0_b, c1_a, c1_b) <= 0, (c0_a, c1_a, c0_b, c1_b)
         # The key: no self-collision on the humanoid that A and B do not already have.
@@ -69,7 +80,7 @@ def test_every_frame_in_range_joins_c1_and_key_collision_free(data_dir):
         ends = frozenset().union(*checker.self_collision_pairs(
             np.stack([a, after.posture_deg[0]])))
         assert not checker.self_collision_pairs(result.key_posture_deg)[0] - ends
-        assert result.diagnostics["key_collision_free"] == 1.0
+        assert result.diagnostics["key_admissible"] == 1.0
         long_way_seen |= result.diagnostics["long_way_dofs"] > 0
     assert long_way_seen
 
@@ -136,17 +147,15 @@ def test_the_window_check_counts_what_the_study_counts_and_keeps_the_better_wind
     assert _added_excess_deg(chosen).max() <= 1e-6
 
 
-def test_where_the_upm_key_breaks_a_limit_feasible_does_not(data_dir):
-    before, after = pair(data_dir, 4)  # 02_07@900 -> 02_05@700
+def test_where_the_upm_window_breaks_a_coupled_rule_feasible_does_not(data_dir):
+    before, after = _pair(data_dir, UPM_BEYOND_RULES)
     upm = transition("upm", before, after, 20, 0.5, sources(data_dir)["upm"])
     feasible = transition("feasible", before, after, 20, 0.5, sources(data_dir)["feasible"])
-    problem = make_problem(before, after, 20, 0.5)
-    _, _, _, widen = allowed_range(problem)
-    limits = before.skeleton.limits_deg
-    upm_key_excess = limit_excess(upm.key_posture_deg, limits)[0] - widen
-    assert upm_key_excess.max() > 1.0  # the UPM key is beyond the allowed range
-    assert _added_excess_deg(upm).max() > 1.0
-    assert (limit_excess(feasible.key_posture_deg, limits)[0] - widen).max() <= 1e-9
+    assert _added_excess_deg(upm).max() <= 1e-6  # inside every box: only the rule sees it
+    assert _added_rule_excess_deg(upm).max() > 10.0
+    assert feasible.diagnostics["key_admissible"] == 1.0
+    assert feasible.diagnostics["window_invalid_frames"] == 0
+    assert _added_rule_excess_deg(feasible).max() <= 1e-6
     assert _added_excess_deg(feasible).max() <= 1e-6
 
 
@@ -165,7 +174,8 @@ def test_the_long_way_is_taken_only_where_the_short_way_leaves_the_range(data_di
     turns = long_way_turns(problem)
     dof = int(np.flatnonzero(turns)[0])
     linear = transition("linear", before, after, 20)
-    assert limit_excess(linear.window_posture_deg, before.skeleton.limits_deg)[:, dof].max() > (
+    boxes = range_boxes_deg(before.skeleton)
+    assert limit_excess(linear.window_posture_deg, boxes)[:, dof].max() > (
         allowed_range(problem)[3][dof] + 10.0)
     moved = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
     assert allowed_range(moved)[2][dof]

@@ -1,13 +1,16 @@
 """``feasible``: the UPM transition made to respect the body — a key posture the humanoid
 can take, and a window fitted as a small convex problem that stays in range.
 
-1. **Key posture.** The allowed range of each DOF is its ASF range widened by what the two
-   end postures A and B already exceed (per DOF, the larger excess of the two: the study's
-   "added excess" rule, :func:`controller.checks.validity.added_excess`), so the method is
-   judged only on what it adds. Per joint class, the map's neurons nearest the alpha-point
-   C of A->B that lie inside the allowed range are the candidates (a class with none
-   takes C clamped into the range); whole-body candidates (one neuron per class) are
-   tried nearest first, and the first whose posture the humanoid takes without a
+1. **Key posture.** The allowed range of each DOF is its box of the human range of motion
+   (:func:`upm.motion.human_boxes.human_dof_boxes`: the humanoid's hinge ranges; not the
+   ASF's nominal limits) widened by what the two end postures A and B already exceed (per
+   DOF, the larger excess of the two: the study's "added excess" rule,
+   :func:`controller.checks.validity.added_excess`), so the method is judged only on what
+   it adds. Per joint class, the map's neurons nearest the alpha-point C of A->B that lie
+   inside the allowed range are the candidates (a class with none takes C clamped into
+   the range); whole-body candidates (one neuron per class) are tried nearest first, and
+   the first that the human range's coupled rules allow (:mod:`upm.motion.human_rom`:
+   no rule broken beyond what A and B break) and that the humanoid takes without a
    self-collision that A and B do not already have is the key. The UPM curve is then the
    paper's: the cubic B-spline through the clips' frames and that key
    (:func:`upm.transitions.spline.keyframe_spline`).
@@ -24,11 +27,14 @@ can take, and a window fitted as a small convex problem that stays in range.
    the same matrix for every DOF and pair of the same layout: the equality-constrained
    solution of all DOFs is one cached linear map; only DOFs whose frames leave the range
    go to the QP solver (``quadprog``, Goldfarb-Idnani, the project's QP dependency).
-3. **Self-collision and the floor across the window.** The fitted window is checked
-   frame by frame on the humanoid (about 8 microseconds a frame), with the window's
-   shared root (``WindowProblem.root_window``) so that the floor is checked too: a frame
-   counts when it has any self-collision or a geom more than 1 cm below the floor — what
-   the study counts, beyond the range the fit already keeps. If a frame counts, the next
+3. **Coupled rules, self-collision and the floor across the window.** The boxes cannot
+   state a coupled rule (a shoulder's twist allowed at its elevation), so the fitted
+   window is checked frame by frame against the human range's rules and on the humanoid
+   (about 8 microseconds a frame), with the window's shared root
+   (``WindowProblem.root_window``) so that the floor is checked too: a frame counts when
+   it breaks a rule beyond the ends, has any self-collision beyond its soft-tissue
+   allowance or a geom deeper below the floor than its class allows — what the study
+   counts, beyond the boxes the fit already keeps. If a frame counts, the next
    candidate window is fitted and checked (up to :data:`WINDOW_TRIES` windows), and the
    window with the fewest such frames is kept (the first on a tie). The second candidate
    is the alpha-point C itself, clamped into the allowed range (when the humanoid takes
@@ -71,8 +77,8 @@ self-collision deeper than 1 mm, per posture). The humanoid's checker is
 that wires it lazily (``"controller.checks.kinematic_check:feasible_key_source"``), so the
 registry entry is one line, importing ``upm.transitions`` stays MuJoCo-free, and the
 command line, the studio, the bench and the study all get the checked source. Without a
-checker (``FeasibleKeys(map)`` in a script) the method still keeps every frame in range;
-it just cannot avoid self-collisions.
+checker (``FeasibleKeys(map)`` in a script) the method still keeps every frame in range
+and checks the coupled rules; it just cannot avoid self-collisions.
 """
 from __future__ import annotations
 
@@ -82,11 +88,19 @@ import itertools
 import numpy as np
 
 from upm.core.errors import UsageError
+from upm.motion.range_models import range_model
+from upm.motion.skeleton import JOINTS
 from upm.ops.angles import angle_diff_deg, wrap_deg
+from upm.transitions import slerp
 from upm.transitions.base import TransitionMethod, WindowProblem, WindowResult
 from upm.transitions.feasible_fit import fit_window
 from upm.transitions.feasible_keys import FeasibleKeys, clamp_into_range, feasible_key_source
-from upm.transitions.feasible_range import allowed_range, limit_turns, long_way_turns
+from upm.transitions.feasible_range import (
+    allowed_range,
+    limit_turns,
+    long_way_turns,
+    range_boxes_deg,
+)
 from upm.transitions.spline import keyframe_spline
 
 #: Candidate windows fitted and checked at most (when the first has invalid frames).
@@ -109,22 +123,67 @@ def _upm_curve(problem: WindowProblem, key: np.ndarray) -> np.ndarray:
     return keyframe_spline(times, values, problem.window_times)
 
 
-def _invalid_frames(checker, window_deg, root) -> int:
-    """Window frames the study counts invalid for a reason the range cannot prevent: a
-    self-collision (any pair, as the study counts it) or, with the root, a foot or body
-    below the floor."""
-    colliding, floor = checker.frame_checks(window_deg, root, names=False)
-    return int(np.count_nonzero(colliding | floor))
+def _added_rule_excess_deg(problem: WindowProblem, postures_deg) -> np.ndarray:
+    """Degrees beyond each rule of the human range beyond what the window's ends already
+    break (the study's added excess), (N, R): a coupled rule, such as a shoulder's twist at
+    its elevation, that the per-DOF boxes cannot state."""
+    model = range_model()
+    skeleton = problem.skeleton
+    ends = model.excess_deg(skeleton, np.stack([problem.a_deg, problem.b_deg])).max(axis=0)
+    return np.maximum(model.excess_deg(skeleton, postures_deg) - ends, 0.0)
 
 
-def _keys_in_order(candidates, straight, checker, at_ends):
+def _beyond_rules(problem: WindowProblem, postures_deg) -> np.ndarray:
+    """Which postures (N, 63) break a rule of the human range beyond the ends, bool (N,)."""
+    return _added_rule_excess_deg(problem, postures_deg).max(axis=1) > 1e-6
+
+
+def _with_geodesic_joints(problem: WindowProblem, curve_deg, window_deg, constrained):
+    """The curve (L, 63) with each joint whose window breaks a rule of the human range
+    replaced by that joint's geodesic (``slerp``'s shortest rotation from A to B, which
+    keeps a joint inside a rule both ends satisfy far more often than a path in Euler
+    angles does), and the problem with clip 2 a whole turn further where the geodesic
+    arrives at B on another turn (only on DOFs without a bound); None when no joint can be
+    replaced; and the number of joints replaced."""
+    broken = _added_rule_excess_deg(problem, window_deg).max(axis=0) > 1e-6
+    joints = {rule.split(".")[0] for rule, b in zip(range_model().rule_names, broken,
+                                                     strict=True) if b}
+    geodesic = slerp.solve(problem).posture_deg
+    curve, turns, replaced = np.array(curve_deg, dtype=float), np.zeros(63), 0
+    for joint in sorted(joints):
+        dofs = slice(3 * JOINTS.index(joint), 3 * JOINTS.index(joint) + 3)
+        turn = np.round((geodesic[-1, dofs] - problem.b_deg[dofs]) / 360.0)
+        if np.any((turn != 0) & constrained[dofs]):
+            continue
+        curve[:, dofs], turns[dofs] = geodesic[:, dofs], turn
+        replaced += 1
+    if not replaced:
+        return None, problem, 0
+    moved = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
+    return curve, moved, replaced
+
+
+def _invalid_frames(problem: WindowProblem, checker, window_deg, root) -> int:
+    """Window frames the study counts invalid for a reason the range's boxes cannot
+    prevent: a coupled rule of the human range broken beyond the ends, a self-collision
+    (any pair, as the study counts it) or, with the root, a foot or body below the floor."""
+    invalid = _beyond_rules(problem, window_deg)
+    if checker is not None:
+        colliding, floor = checker.frame_checks(window_deg, root, names=False)
+        invalid |= colliding | floor
+    return int(np.count_nonzero(invalid))
+
+
+def _keys_in_order(problem, candidates, straight, checker, at_ends):
     """The key candidates in the order their windows are tried, each with whether the
-    humanoid takes it without a self-collision that A and B do not have: the map's
-    nearest collision-free key, the alpha-point (``straight``, if collision-free), the
-    map's other collision-free keys, then its colliding ones. Checked lazily: only the
-    keys whose window is fitted cost a check."""
+    humanoid takes it (inside the human range's rules beyond what A and B break, and
+    without a self-collision that A and B do not have): the map's nearest such key, the
+    alpha-point (``straight``, if it is one), the map's other such keys, then the rest.
+    Checked lazily: only the keys whose window is fitted cost a check."""
     def free(key) -> bool:
-        return not checker.self_collision_pairs(key)[0] - at_ends
+        if _beyond_rules(problem, key[None])[0]:
+            return False
+        return checker is None or not checker.self_collision_pairs(key)[0] - at_ends
 
     rest = iter(candidates)
     colliding = []
@@ -154,43 +213,53 @@ def solve(problem: WindowProblem) -> WindowResult:
     if turns.any():
         problem = dataclasses.replace(problem, after_deg=problem.after_deg + 360.0 * turns)
     lower, upper, constrained, widen = allowed_range(problem)
+    boxes = range_boxes_deg(skeleton)
     point = wrap_deg(problem.a_deg + problem.alpha * (problem.b_deg - problem.a_deg))
-    candidates = source.candidates(point, skeleton.limits_deg, widen)
+    candidates = source.candidates(point, boxes, widen)
     checker = source.checker(skeleton)
 
-    if checker is None:
-        keys = iter([(candidates[0], None)])
-    else:
+    at_ends = frozenset()
+    if checker is not None:
         end_pairs = checker.self_collision_pairs(np.stack([problem.a_deg, problem.b_deg]))
-        straight = (clamp_into_range(point, skeleton.limits_deg, widen) if STRAIGHT_KEY
-                    else None)
-        keys = _keys_in_order(candidates, straight, checker, frozenset().union(*end_pairs))
+        at_ends = frozenset().union(*end_pairs)
+    straight = clamp_into_range(point, boxes, widen) if STRAIGHT_KEY else None
+    keys = _keys_in_order(problem, candidates, straight, checker, at_ends)
+
+    def fitted(curve, on=problem):
+        bounds = (lower, upper, constrained) if on is problem else allowed_range(on)[:3]
+        window, fit = fit_window(on, curve, *bounds)
+        return _invalid_frames(on, checker, window, on.root_window), window, fit
 
     best = None
-    for attempt, (key_wrapped, collision_free) in enumerate(itertools.islice(keys, WINDOW_TRIES)):
-        key = _continuous_key(problem, key_wrapped)
-        window, fit = fit_window(problem, _upm_curve(problem, key), lower, upper, constrained)
-        invalid = 0
-        if checker is not None:
-            invalid = _invalid_frames(checker, window, problem.root_window)
+    for attempt, (key_wrapped, admissible) in enumerate(itertools.islice(keys, WINDOW_TRIES)):
+        curve = _upm_curve(problem, _continuous_key(problem, key_wrapped))
+        invalid, window, fit = fitted(curve)
+        geodesic = 0
+        if invalid and _beyond_rules(problem, window).any():
+            repaired, moved, joints = _with_geodesic_joints(problem, curve, window,
+                                                            constrained)
+            if repaired is not None:
+                candidate = fitted(repaired, moved)
+                if candidate[0] < invalid:
+                    (invalid, window, fit), geodesic = candidate, joints
         if best is None or invalid < best[0]:
-            best = (invalid, window, key_wrapped, fit, attempt, collision_free)
-        if invalid == 0 or checker is None:
+            best = (invalid, window, key_wrapped, fit, attempt, admissible, geodesic)
+        if invalid == 0:
             break
-    invalid, window, key_wrapped, fit, attempt, collision_free = best
+    invalid, window, key_wrapped, fit, attempt, admissible, geodesic = best
     diagnostics = {
         "key_candidate": float(attempt),
         "window_invalid_frames": float(invalid),
         "unconstrained_dofs": float((skeleton.declared & ~constrained).sum()),
         "long_way_dofs": float(np.count_nonzero(turns)),
+        "geodesic_joints": float(geodesic),
         "limit_turn_dofs": float(limit_turns(problem, lower, upper, constrained).any(
             axis=0).sum()),
         "kinematic_checks": float(checker is not None),
         "floor_checked": float(checker is not None and problem.root_window is not None),
         **fit,
     }
-    if checker is not None:
-        diagnostics["key_collision_free"] = float(collision_free)
+    diagnostics["key_admissible"] = float(admissible)
     return WindowResult(window, key_posture_deg=wrap_deg(key_wrapped), diagnostics=diagnostics)
 
 

@@ -61,7 +61,7 @@ class FeasibleKeys:
         return entry[1]
 
     def neuron_excess(self, limits_deg: np.ndarray) -> dict[str, np.ndarray]:
-        """Per class, each neuron's excess beyond the ASF limits, ``(K_c, D_c)`` degrees
+        """Per class, each neuron's excess beyond per-DOF boxes, ``(K_c, D_c)`` degrees
         (cached per set of limits)."""
         key = np.ascontiguousarray(limits_deg).tobytes()
         if key not in self._excess:
@@ -92,7 +92,7 @@ class FeasibleKeys:
         point_deg : ndarray, shape (63,)
             The alpha-point C of A->B.
         limits_deg : ndarray, shape (63, 2)
-            ASF limits.
+            The range's boxes (:func:`upm.transitions.feasible_range.range_boxes_deg`).
         widen_deg : ndarray, shape (63,)
             The allowed excess per DOF (the ends' larger excess).
         count : int

@@ -1,11 +1,13 @@
-"""The range a ``feasible`` window must stay in: each DOF's range widened by what the two
-end postures already exceed, and the DOFs whose short way crosses a limit (taken the long
-way round)."""
+"""The range a ``feasible`` window must stay in: each DOF's box of the human range of motion
+(:func:`upm.motion.human_boxes.human_dof_boxes`, the humanoid's hinge ranges) widened by
+what the two end postures already exceed, and the DOFs whose short way crosses a limit
+(taken the long way round)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from upm.motion.human_boxes import human_dof_boxes
 from upm.motion.limits import limit_excess_deg
 from upm.transitions.base import WindowProblem
 
@@ -16,9 +18,10 @@ RANGE_MARGIN_DEG = 1e-4
 
 def long_way_turns(problem: WindowProblem) -> np.ndarray:
     """Per DOF, the whole turns (-1, 0 or +1) to add to clip 2 so that A -> B stays inside
-    the allowed arc: nonzero where the short way from A to B leaves it but the long way
-    does not (a joint cannot turn through its limit; with the arc widened by the ends'
-    excess, this happens on real pairs, e.g. a shoulder rz beyond its limit at B).
+    the allowed arc: nonzero where the arc is less than a full turn and the short way from
+    A to B leaves it but the long way does not (a joint cannot turn through its limit;
+    with the arc widened by the ends' excess, this happens on real pairs, e.g. a foot's rz
+    beyond its box at B).
 
     Returns
     -------
@@ -34,12 +37,18 @@ def long_way_turns(problem: WindowProblem) -> np.ndarray:
         moved = b + 360.0 * k
         fits = ((b < lo_t - tolerance) | (b > hi_t + tolerance)) & (
             moved >= lo_t - tolerance) & (moved <= hi_t + tolerance)
-        turns[fits & problem.skeleton.declared] = k
+        turns[fits & problem.skeleton.declared & (hi - lo < 360.0 - 1e-6)] = k
     return turns
 
 
+def range_boxes_deg(skeleton) -> np.ndarray:
+    """The boxes ``feasible`` keeps every window frame in, (63, 2) degrees: the human
+    range's box per DOF (the humanoid's hinge ranges), not the ASF's nominal limits."""
+    return human_dof_boxes(skeleton)
+
+
 def _widened(problem: WindowProblem):
-    limits = problem.skeleton.limits_deg
+    limits = range_boxes_deg(problem.skeleton)
     ends = limit_excess_deg(np.stack([problem.a_deg, problem.b_deg]), limits)
     widen = ends.max(axis=0)
     return limits[:, 0] - widen, limits[:, 1] + widen, widen
@@ -57,7 +66,7 @@ def allowed_range(problem: WindowProblem) -> tuple[np.ndarray, np.ndarray, np.nd
         DOFs with a bound: declared, range below a full turn, and B (as the problem has
         it: see :func:`long_way_turns`) inside the arc on A's turn.
     widen_deg : ndarray, shape (63,)
-        The larger of A's and B's excess beyond the ASF limits, per DOF.
+        The larger of A's and B's excess beyond the range's boxes, per DOF.
     """
     lo, hi, widen = _widened(problem)
     a, b = problem.a_deg, problem.b_deg
