@@ -110,3 +110,48 @@ def test_a_window_the_body_cannot_keep_is_a_finding():
     assert "left it to stay up" in finding(left, "feasible")
     assert "error" not in finding(kept, "linear").split("\n")[0]
     assert "without falling" in finding(kept, "linear")
+
+
+def _ghost_pixels(rgb: np.ndarray) -> int:
+    """Pixels of the 3D view (left of the GUI panel) green enough to be the ghost (its
+    translucent green over the grey body or the background)."""
+    view = rgb[:, :900].astype(int)
+    return int(((view[..., 1] - np.maximum(view[..., 0], view[..., 2])) > 25).sum())
+
+
+@pytest.mark.browser
+def test_the_page_shows_the_ghost_and_says_which_is_which(catalog, tmp_path):
+    """The real page in headless Chromium: ticking the ghost draws a second, green body in
+    the 3D view, and the panel says which body is the performed window and which the
+    asked one."""
+    from studio.app import Studio
+    from tests.test_studio import CHROMIUM, _open_browser, _wait_for_shot
+
+    if CHROMIUM is None:
+        pytest.skip("no chromium on this machine (scripts/setup installs Debian's)")
+    session = _session(catalog)
+    studio = Studio(session, port=_free_port(), out=tmp_path / "exports")
+    driver = browser = None
+    try:
+        studio.playing.value = False
+        studio.set(method="performed", follow="linear")
+        assert studio.performer.wait(timeout=600)
+        studio.set(frame=studio.scene.result.window.stop - 1)
+        driver, browser = _open_browser()
+        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
+        page.wait_for_function("document.body.innerText.includes('solid: performed')",
+                               timeout=240_000)
+        alone = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: True)
+        studio.set(performed_ghost=True)
+        both = _wait_for_shot(page, tmp_path / "b.png",
+                              lambda rgb: _ghost_pixels(rgb) > _ghost_pixels(alone) + 300)
+        page.wait_for_function("document.body.innerText.includes('translucent green: "
+                               "asked (linear')", timeout=60_000)
+    finally:
+        if browser is not None:
+            browser.close()
+        if driver is not None:
+            driver.stop()
+        studio.stop()
+    assert _ghost_pixels(both) > _ghost_pixels(alone) + 300, "no ghost in the 3D view"
