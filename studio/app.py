@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from studio.exports import ExportFolder, ExportRefused
+from studio.ghost import PerformedGhost
 from studio.origin import OriginGuard, guarded_viser
 from studio.session import Scene, Session, capsule_geoms, method_names
 
@@ -85,6 +86,12 @@ class Studio:
         self.method = gui.add_dropdown("method", methods, initial_value=session.method)
         self.compare = gui.add_dropdown("ghost method", ["(none)", *methods],
                                         initial_value="(none)")
+        self.follow = gui.add_dropdown("performed follows",
+                                       [m for m in methods if m != "performed"],
+                                       initial_value=session.follow)
+        self.performed_ghost = gui.add_checkbox("ghost: performed beside asked", False)
+        self.ghost_note = gui.add_markdown("")
+        self.performer = PerformedGhost(self.ghost_note, self.refresh)
         self.alpha = gui.add_slider("alpha", 0.0, 1.0, 0.01, session.alpha)
         self.frames = gui.add_slider("window frames", 2, 120, 1, session.frames)
         self.playing = gui.add_checkbox("play", True)
@@ -101,7 +108,8 @@ class Studio:
         self.report = gui.add_markdown("")
         self.dof.on_update(lambda _: self.apply_gui())
         for handle in (self.clip1, self.a_frame, self.clip2, self.b_frame, self.method,
-                       self.compare, self.alpha, self.frames):
+                       self.compare, self.alpha, self.frames, self.follow,
+                       self.performed_ghost):
             handle.on_update(lambda _: self.apply_gui())
         self.frame.on_update(lambda _: self.show_frame(int(self.frame.value)))
         self.scene: Scene | None = None
@@ -179,16 +187,18 @@ class Studio:
         s.method, s.alpha, s.frames = self.method.value, float(self.alpha.value), int(
             self.frames.value)
         s.compare_method = None if self.compare.value == "(none)" else self.compare.value
+        s.follow, s.performed_ghost = self.follow.value, bool(self.performed_ghost.value)
         self.refresh()
 
     def refresh(self) -> None:
-        """Recompute the transition (and the ghost) and redraw the current frame."""
+        """Recompute the transition (and the ghost) and redraw the current frame; a
+        performed window not made yet is asked of :attr:`performer` (off this thread), and
+        the asked one is drawn until it is done."""
         start = time.perf_counter()
         with self.lock:
             try:
-                scene = self.session.recompute()
-                ghost = (self.session.recompute(self.session.compare_method)
-                         if self.session.compare_method else None)
+                scene, ghost, note = self.performer.scenes(self.session)
+                self.ghost_note.content = note
                 linear = (scene.result if scene.result.method == "linear"
                           else self.session.transition("linear"))
             except Exception as error:  # shown in the page, the server keeps running
@@ -338,7 +348,9 @@ class Studio:
                 self.frame.value = t
 
     def stop(self) -> None:
-        """Shut the web server (and the Fig. 13 thread) down."""
+        """Shut the web server (and the Fig. 13 thread) down; a performance under way
+        finishes in its thread and draws nothing."""
+        self.performer.closed = True
         with self._curve_ready:
             self._stopped = True
             self._curve_ready.notify_all()

@@ -5,7 +5,9 @@ No web code here, so tests (and any other front end) drive it directly.
 
 from __future__ import annotations
 
+import copy
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,11 +20,19 @@ def method_names() -> list[str]:
     return list(METHODS)
 
 
-def key_source(method: str, map_path, catalog):
-    """The key-posture source a method needs (None for those that need none)."""
+def key_source(method: str, map_path, catalog, follow: str | None = None,
+               performer_config=None):
+    """The key-posture source a method needs (None for those that need none); for
+    ``performed``, that of the followed method ``follow`` with the performer's
+    configuration (a :class:`controller.config.ControllerConfig`; None: the defaults)."""
     from upm.transitions.load import key_source_for
 
-    return key_source_for(method, map_path, catalog)
+    if method != "performed":
+        return key_source_for(method, map_path, catalog)
+    with warnings.catch_warnings():  # a map the followed method does not use is fine here
+        warnings.simplefilter("ignore")
+        return key_source_for(method, map_path, catalog, follow=follow,
+                              performer_config=performer_config)
 
 
 @dataclass
@@ -56,11 +66,15 @@ class Session:
     """Clip 1 up to ``a_frame``, a ``method`` window of ``frames``, clip 2 from ``b_frame``.
 
     ``key_sources`` (method name -> key-posture source) are used as given; the others are
-    built on first use from ``map_path`` and the catalogue.
+    built on first use from ``map_path`` and the catalogue. ``performed`` follows
+    :attr:`follow` (``feasible`` with a map, else ``linear``), searched with
+    ``performer_config`` (a :class:`controller.config.ControllerConfig`; None: the
+    defaults); :attr:`performed_ghost` asks for the performed window beside the asked one
+    (:mod:`studio.ghost`).
     """
 
     def __init__(self, catalog, clip1: str, clip2: str, map_path=None, context: int = 60,
-                 key_sources: dict | None = None):
+                 key_sources: dict | None = None, performer_config=None):
         self.catalog = catalog
         self.map_path = map_path
         self.context = context
@@ -76,6 +90,10 @@ class Session:
         self.subject: str | None = None
         self.model = self.humanoid()
         self._sources: dict[str, object] = dict(key_sources or {})
+        self.follow = "feasible" if map_path else "linear"
+        self.performer_config = performer_config
+        self.performed_ghost = False
+        self._performed: dict[tuple, Scene] = {}
 
     def clip(self, name: str):
         """A clip of the catalogue (``upm.Motion``), read once: a slider move must not read
@@ -96,9 +114,34 @@ class Session:
         return self.model
 
     def _source(self, method: str):
-        if method not in self._sources:
-            self._sources[method] = key_source(method, self.map_path, self.catalog)
-        return self._sources[method]
+        name = (method, self.asked_method()) if method == "performed" else method
+        if name not in self._sources:
+            self._sources[name] = key_source(method, self.map_path, self.catalog,
+                                             self.asked_method(), self.performer_config)
+        return self._sources[name]
+
+    def asked_method(self) -> str:
+        """The method whose window ``performed`` follows: :attr:`follow` when the method
+        is ``performed``, else the method itself (its window is the asked one)."""
+        return self.follow if self.method == "performed" else self.method
+
+    def performed_key(self) -> tuple:
+        """The settings a performed window depends on (its cache key)."""
+        return (self.clip1, self.a_frame, self.clip2, self.b_frame, self.frames,
+                round(float(self.alpha), 6), self.asked_method(), self.context)
+
+    def performed_scene(self) -> Scene | None:
+        """The performed scene of the current settings if made already, else None."""
+        return self._performed.get(self.performed_key())
+
+    def perform(self) -> Scene:
+        """The performed scene of the current settings: the humanoid performs the asked
+        window (slow: the offline effort's search), once per settings."""
+        key = self.performed_key()
+        if key not in self._performed:
+            frozen = copy.copy(self)  # the settings of the call, whatever changes meanwhile
+            self._performed[key] = frozen.recompute("performed")
+        return self._performed[key]
 
     def _pieces(self):
         from upm.core.errors import UsageError
@@ -117,6 +160,10 @@ class Session:
         from upm.transitions import transition
 
         method = method or self.method
+        if method == "performed":
+            from studio.ghost import ensure_performer
+
+            ensure_performer()
         before, after = self._pieces()
         return transition(method, before, after, self.frames, self.alpha, self._source(method))
 

@@ -31,6 +31,10 @@ def configure(parser) -> None:
                         help="clip 2 (default 02_03)")
     parser.add_argument("--map", metavar="MAP.npz", default=None,
                         help="trained posture map (upm train), for --method upm/som")
+    parser.add_argument("--config", metavar="FILE.toml", default=None,
+                        help="the humanoid's configuration for the method performed (its "
+                        "[offline] section sets the search), from a TOML file (default: "
+                        "the built-in constants)")
     parser.add_argument("--host", default="127.0.0.1", help="address to serve on "
                         "(default 127.0.0.1; use SSH port forwarding to reach it)")
     parser.add_argument("--port", type=int, default=8080, help="port (default 8080)")
@@ -47,6 +51,8 @@ def run(args) -> int:
     import sys
     from pathlib import Path
 
+    from controller.offline.performer import install
+    from upm.commands.common import controller_config
     from upm.core.errors import UsageError
     from upm.motion.catalog import Catalog
 
@@ -68,12 +74,15 @@ def run(args) -> int:
               f"port {args.port} can drive the studio (and write exports); prefer SSH port "
               f"forwarding: ssh -L {args.port}:127.0.0.1:{args.port} HOST", file=sys.stderr,
               flush=True)
+    performer_config = controller_config(args)
+    install()  # the method performed, as the other commands install it
     catalog = Catalog(args.data)
     for name in (args.clip1, args.clip2):
         if name not in catalog:
             raise UsageError(f"no clip {name} in {args.data or 'the catalogue'}")
-    studio = Studio(Session(catalog, args.clip1, args.clip2, args.map), args.host, args.port,
-                    out=args.out, allow_origins=allowed)
+    session = Session(catalog, args.clip1, args.clip2, args.map,
+                      performer_config=performer_config)
+    studio = Studio(session, args.host, args.port, out=args.out, allow_origins=allowed)
     print(f"upm studio: open http://{args.host}:{studio.port} (Ctrl-C stops); exports go "
           f"to {studio.exports.root}", flush=True)
     try:
