@@ -48,8 +48,9 @@ class Scene:
     valid : (T,) bool array, frame passes the kinematic checks (limits, self-collision,
         floor).
     offending : (T, G) bool array, the capsules whose body breaks a check on that frame
-        (a DOF of its bone beyond its limit, a self-contact deeper than 1 mm, more than
-        1 cm below the floor): what the studio tints.
+        by the calibrated verdict (a rule of its joint's human range broken, a
+        self-contact deeper than its body pair's soft-tissue allowance, deeper below the
+        floor than its class allows): what the studio tints.
     seconds : float, wall time of the whole recomputation (transition + kinematics + checks).
     """
 
