@@ -3,6 +3,7 @@ headless Chromium (Debian's ``chromium``, driven by Playwright)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 
@@ -63,19 +64,26 @@ def test_alpha_reshapes_the_window_and_poses_follow(session):
     assert low.valid.shape == (n,)
 
 
-def _open_browser():
+@contextlib.contextmanager
+def _chromium():
     """Headless Chromium (Debian's) driven by Playwright, so the test waits for what it
     needs to see instead of guessing a load time: a one-shot ``--screenshot`` with a
-    virtual-time budget captured a blank page on a loaded CI machine."""
+    virtual-time budget captured a blank page on a loaded CI machine. Closed on exit."""
     from playwright.sync_api import sync_playwright
 
     driver = sync_playwright().start()
-    browser = driver.chromium.launch(
-        executable_path=CHROMIUM,
-        args=["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-              "--disable-background-networking", "--disable-component-update",
-              "--disable-sync", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
-    return driver, browser
+    try:
+        browser = driver.chromium.launch(
+            executable_path=CHROMIUM,
+            args=["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"])
+        try:
+            yield browser
+        finally:
+            browser.close()
+    finally:
+        driver.stop()
 
 
 def _wait_for_shot(page, path, done, timeout_s=240.0) -> np.ndarray:
@@ -121,31 +129,26 @@ def test_page_in_headless_chromium_follows_alpha(session, tmp_path):
 
     studio = Studio(session, port=_free_port())
     messages = []
-    driver = browser = None
     try:
         # Paused, so that the only change on the page is the one alpha makes.
         studio.playing.value = False
         first = studio.set(alpha=0.1, frame=studio.scene.result.window.start + 10)
         first_pos_m = first.geom_pos_m[int(studio.frame.value)]
-        driver, browser = _open_browser()
-        page = browser.new_page(viewport={"width": 1400, "height": 1000})
-        page.on("pageerror", lambda error: messages.append(f"page error: {error}"))
-        page.on("console", lambda message: messages.append(message.text))
-        page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
-        low = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: _figure_pixels(rgb) > 500)
-        assert _figure_pixels(low) > 500, f"no humanoid in the 3D view; page said {messages}"
-        second = studio.set(alpha=0.9)
-        high = _wait_for_shot(page, tmp_path / "b.png",
-                              lambda rgb: _view_pixels_changed(low, rgb) > 300)
-        assert studio.wait_for_curve(timeout=300)
-        curve_h, curve_w = np.asarray(studio.curve.image).shape[:2]
-        shown = page.evaluate("Array.from(document.images, i => [i.naturalWidth, "
-                              "i.naturalHeight])")
+        with _chromium() as browser:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.on("pageerror", lambda error: messages.append(f"page error: {error}"))
+            page.on("console", lambda message: messages.append(message.text))
+            page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
+            low = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: _figure_pixels(rgb) > 500)
+            assert _figure_pixels(low) > 500, f"no humanoid in the 3D view; page said {messages}"
+            second = studio.set(alpha=0.9)
+            high = _wait_for_shot(page, tmp_path / "b.png",
+                                  lambda rgb: _view_pixels_changed(low, rgb) > 300)
+            assert studio.wait_for_curve(timeout=300)
+            curve_h, curve_w = np.asarray(studio.curve.image).shape[:2]
+            shown = page.evaluate("Array.from(document.images, i => [i.naturalWidth, "
+                                  "i.naturalHeight])")
     finally:
-        if browser is not None:
-            browser.close()
-        if driver is not None:
-            driver.stop()
         studio.stop()
     assert first.result.alpha == 0.1 and second.result.alpha == 0.9
     assert np.abs(first.result.window_posture_deg

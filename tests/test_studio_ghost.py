@@ -4,12 +4,13 @@ followed method's frames; on the real clips 02_01 -> 02_03, with a small search.
 
 from __future__ import annotations
 
-import socket
-
 import numpy as np
 import pytest
 
 pytest.importorskip("viser", reason="upm studio needs viser (the dev extra installs it)")
+
+from tests.test_studio import CHROMIUM, _chromium, _free_port, _wait_for_shot  # noqa: E402
+
 
 def _small():
     from controller.config import DEFAULT
@@ -23,12 +24,6 @@ def _session(catalog):
     s = Session(catalog, "02_01", "02_03", performer_config=_small())
     s.a_frame, s.b_frame, s.frames = 200, 20, 20  # mid-walk to mid-walk, as the study
     return s
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 @pytest.mark.physics
@@ -125,33 +120,27 @@ def test_the_page_shows_the_ghost_and_says_which_is_which(catalog, tmp_path):
     the 3D view, and the panel says which body is the performed window and which the
     asked one."""
     from studio.app import Studio
-    from tests.test_studio import CHROMIUM, _open_browser, _wait_for_shot
 
     if CHROMIUM is None:
         pytest.skip("no chromium on this machine (scripts/setup installs Debian's)")
     session = _session(catalog)
     studio = Studio(session, port=_free_port(), out=tmp_path / "exports")
-    driver = browser = None
     try:
         studio.playing.value = False
         studio.set(method="performed", follow="linear")
         assert studio.performer.wait(timeout=600)
         studio.set(frame=studio.scene.result.window.stop - 1)
-        driver, browser = _open_browser()
-        page = browser.new_page(viewport={"width": 1400, "height": 1000})
-        page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
-        page.wait_for_function("document.body.innerText.includes('solid: performed')",
-                               timeout=240_000)
-        alone = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: True)
-        studio.set(performed_ghost=True)
-        both = _wait_for_shot(page, tmp_path / "b.png",
-                              lambda rgb: _ghost_pixels(rgb) > _ghost_pixels(alone) + 300)
-        page.wait_for_function("document.body.innerText.includes('translucent green: "
-                               "asked (linear')", timeout=60_000)
+        with _chromium() as browser:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.goto(f"http://127.0.0.1:{studio.port}/", timeout=240_000)
+            page.wait_for_function("document.body.innerText.includes('solid: performed')",
+                                   timeout=240_000)
+            alone = _wait_for_shot(page, tmp_path / "a.png", lambda rgb: True)
+            studio.set(performed_ghost=True)
+            both = _wait_for_shot(page, tmp_path / "b.png",
+                                  lambda rgb: _ghost_pixels(rgb) > _ghost_pixels(alone) + 300)
+            page.wait_for_function("document.body.innerText.includes('translucent green: "
+                                   "asked (linear')", timeout=60_000)
     finally:
-        if browser is not None:
-            browser.close()
-        if driver is not None:
-            driver.stop()
         studio.stop()
     assert _ghost_pixels(both) > _ghost_pixels(alone) + 300, "no ghost in the 3D view"

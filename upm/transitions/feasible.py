@@ -123,30 +123,29 @@ def _upm_curve(problem: WindowProblem, key: np.ndarray) -> np.ndarray:
     return keyframe_spline(times, values, problem.window_times)
 
 
-def _added_rule_excess_deg(problem: WindowProblem, postures_deg) -> np.ndarray:
-    """Degrees beyond each rule of the human range beyond what the window's ends already
-    break (the study's added excess), (N, R): a coupled rule, such as a shoulder's twist at
-    its elevation, that the per-DOF boxes cannot state."""
-    model = range_model()
-    skeleton = problem.skeleton
+def _added_rule_excess(problem: WindowProblem):
+    """``added(postures_deg) -> (N, R)``: degrees beyond each rule of the human range
+    beyond what the window's ends already break (the study's added excess; a coupled rule,
+    such as a shoulder's twist at its elevation, that the per-DOF boxes cannot state). The
+    ends' excess is computed once; it does not change when clip 2 is taken a whole turn
+    further."""
+    model, skeleton = range_model(), problem.skeleton
     ends = model.excess_deg(skeleton, np.stack([problem.a_deg, problem.b_deg])).max(axis=0)
-    return np.maximum(model.excess_deg(skeleton, postures_deg) - ends, 0.0)
+
+    def added(postures_deg) -> np.ndarray:
+        return np.maximum(model.excess_deg(skeleton, postures_deg) - ends, 0.0)
+
+    return added
 
 
-def _beyond_rules(problem: WindowProblem, postures_deg) -> np.ndarray:
-    """Which postures (N, 63) break a rule of the human range beyond the ends, bool (N,)."""
-    return _added_rule_excess_deg(problem, postures_deg).max(axis=1) > 1e-6
-
-
-def _with_geodesic_joints(problem: WindowProblem, curve_deg, window_deg, constrained):
-    """The curve (L, 63) with each joint whose window breaks a rule of the human range
+def _with_geodesic_joints(problem: WindowProblem, curve_deg, broken_rules, constrained):
+    """The curve (L, 63) with each joint of a broken rule (``broken_rules``, bool (R,))
     replaced by that joint's geodesic (``slerp``'s shortest rotation from A to B, which
     keeps a joint inside a rule both ends satisfy far more often than a path in Euler
     angles does), and the problem with clip 2 a whole turn further where the geodesic
     arrives at B on another turn (only on DOFs without a bound); None when no joint can be
     replaced; and the number of joints replaced."""
-    broken = _added_rule_excess_deg(problem, window_deg).max(axis=0) > 1e-6
-    joints = {rule.split(".")[0] for rule, b in zip(range_model().rule_names, broken,
+    joints = {rule.split(".")[0] for rule, b in zip(range_model().rule_names, broken_rules,
                                                      strict=True) if b}
     geodesic = slerp.solve(problem).posture_deg
     curve, turns, replaced = np.array(curve_deg, dtype=float), np.zeros(63), 0
@@ -163,25 +162,27 @@ def _with_geodesic_joints(problem: WindowProblem, curve_deg, window_deg, constra
     return curve, moved, replaced
 
 
-def _invalid_frames(problem: WindowProblem, checker, window_deg, root) -> int:
+def _invalid_frames(added_excess, checker, window_deg, root):
     """Window frames the study counts invalid for a reason the range's boxes cannot
     prevent: a coupled rule of the human range broken beyond the ends, a self-collision
-    (any pair, as the study counts it) or, with the root, a foot or body below the floor."""
-    invalid = _beyond_rules(problem, window_deg)
+    (any pair, as the study counts it) or, with the root, a foot or body below the floor;
+    and which rules the window breaks, bool (R,)."""
+    beyond = added_excess(window_deg) > 1e-6
+    invalid = beyond.any(axis=1)
     if checker is not None:
         colliding, floor = checker.frame_checks(window_deg, root, names=False)
         invalid |= colliding | floor
-    return int(np.count_nonzero(invalid))
+    return int(np.count_nonzero(invalid)), beyond.any(axis=0)
 
 
-def _keys_in_order(problem, candidates, straight, checker, at_ends):
+def _keys_in_order(added_excess, candidates, straight, checker, at_ends):
     """The key candidates in the order their windows are tried, each with whether the
     humanoid takes it (inside the human range's rules beyond what A and B break, and
     without a self-collision that A and B do not have): the map's nearest such key, the
     alpha-point (``straight``, if it is one), the map's other such keys, then the rest.
     Checked lazily: only the keys whose window is fitted cost a check."""
     def free(key) -> bool:
-        if _beyond_rules(problem, key[None])[0]:
+        if added_excess(key[None]).max() > 1e-6:
             return False
         return checker is None or not checker.self_collision_pairs(key)[0] - at_ends
 
@@ -223,25 +224,27 @@ def solve(problem: WindowProblem) -> WindowResult:
         end_pairs = checker.self_collision_pairs(np.stack([problem.a_deg, problem.b_deg]))
         at_ends = frozenset().union(*end_pairs)
     straight = clamp_into_range(point, boxes, widen) if STRAIGHT_KEY else None
-    keys = _keys_in_order(problem, candidates, straight, checker, at_ends)
+    added_excess = _added_rule_excess(problem)
+    keys = _keys_in_order(added_excess, candidates, straight, checker, at_ends)
 
     def fitted(curve, on=problem):
         bounds = (lower, upper, constrained) if on is problem else allowed_range(on)[:3]
         window, fit = fit_window(on, curve, *bounds)
-        return _invalid_frames(on, checker, window, on.root_window), window, fit
+        return (*_invalid_frames(added_excess, checker, window, on.root_window), window,
+                fit)
 
     best = None
     for attempt, (key_wrapped, admissible) in enumerate(itertools.islice(keys, WINDOW_TRIES)):
         curve = _upm_curve(problem, _continuous_key(problem, key_wrapped))
-        invalid, window, fit = fitted(curve)
+        invalid, broken, window, fit = fitted(curve)
         geodesic = 0
-        if invalid and _beyond_rules(problem, window).any():
-            repaired, moved, joints = _with_geodesic_joints(problem, curve, window,
+        if invalid and broken.any():
+            repaired, moved, joints = _with_geodesic_joints(problem, curve, broken,
                                                             constrained)
             if repaired is not None:
                 candidate = fitted(repaired, moved)
                 if candidate[0] < invalid:
-                    (invalid, window, fit), geodesic = candidate, joints
+                    (invalid, _, window, fit), geodesic = candidate, joints
         if best is None or invalid < best[0]:
             best = (invalid, window, key_wrapped, fit, attempt, admissible, geodesic)
         if invalid == 0:
