@@ -56,3 +56,18 @@ def body_figures(model) -> BodyFigures:
         pelvis_height_m=float(data.xpos[root, 2]),
         head_height_m=float(data.site_xpos[head_site, 2]),
     )
+
+
+def floor_normal_force(model, data) -> float:
+    """Total normal force of the floor on the body, N."""
+    import mujoco
+
+    total = 0.0
+    force = np.zeros(6)
+    geom_body = model.geom_bodyid
+    for i in range(data.ncon):
+        g = data.contact.geom[i]
+        if (geom_body[g[0]] == 0) != (geom_body[g[1]] == 0):
+            mujoco.mj_contactForce(model, data, i, force)
+            total += force[0]
+    return total

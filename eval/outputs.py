@@ -287,7 +287,8 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
 
             document["physics"] = physics_document(physics)
             markdown += "\n" + physics_markdown(physics.statistics, config.methods,
-                                                 config.windows, physics.pairs)
+                                                 config.windows, physics.pairs,
+                                                 physics.effort)
             atomic_write_text(stage / "physics.csv", physics.records.to_csv())
             names.append("physics.csv")
             report["physics"] = physics.statistics
@@ -331,9 +332,15 @@ def physics_document(physics) -> dict:
         "protocol": {
             "pairs": physics.pairs,
             "context_s": CONTEXT_S,
-            "controller": "controller.balance.follow: free root, no external force, "
-                          "whole-body inverse dynamics with floor contacts in friction "
-                          "pyramids and each joint's strength",
+            "effort": physics.effort,
+            "controller": ("controller.offline.perform: free root, no external force, "
+                           "position servos with each joint's strength, their targets "
+                           "corrected by a sampling search over segments (the best states "
+                           "kept, backtracking where all are in trouble)"
+                           if physics.effort == "offline" else
+                           "controller.balance.follow: free root, no external force, "
+                           "whole-body inverse dynamics with floor contacts in friction "
+                           "pyramids and each joint's strength"),
             "real_windows": [{"window": k, "n": len(v)}
                              for k, v in physics.real_windows.items()],
             "records": "physics.csv (kind, id, window, method, metric, value)",

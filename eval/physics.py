@@ -42,6 +42,9 @@ CONTEXT_S = 0.5
 CHECKPOINT_NAME = "physics-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/physics-checkpoint"
 CHECKPOINT_VERSION = 2
+#: The free-root body's efforts (:data:`controller.analysis.EFFORTS`): the real-time
+#: balance controller, or the offline effort's sampling search.
+EFFORTS = ("realtime", "offline")
 
 
 @dataclass(frozen=True)
@@ -173,22 +176,44 @@ def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
 
 
 def simulate_unit(model, motion, start: int, stop: int,
-                  config: ControllerConfig = DEFAULT) -> dict[str, float]:
-    """Run the balance controller (with ``config``) over ``motion`` and the figures of
-    its window."""
+                  config: ControllerConfig = DEFAULT,
+                  effort: str = "realtime") -> dict[str, float]:
+    """Run the free-root body over ``motion`` with ``config`` and the figures of its
+    window: the real-time balance controller (``effort="realtime"``) or the offline
+    effort's sampling search (``"offline"``, :func:`controller.offline.perform`)."""
     from controller import to_qpos
-    from controller.balance.follow import follow
-    from controller.balance.run import window_summary
 
-    run = follow(model, to_qpos(model, motion), motion.fps, config=config)
-    summary = window_summary(run, start, stop)
-    fell = run.fall_frame is not None
-    going_down = 0.0 if fell else window_summary(run, 0, run.n_frames)["ends_in_trouble"]
+    qpos = to_qpos(model, motion)
+    if effort == "offline":
+        from controller.offline import perform
+        from controller.offline.window import window_figures
+
+        result = perform(model, qpos, motion.fps, config)
+        summary = window_figures(model, result, qpos, start, stop, config)
+        fall_frame = result.tracking.fall_frame
+        n_frames = result.tracking.n_frames
+
+        def whole_run():
+            return window_figures(model, result, qpos, 0, n_frames, config)
+    elif effort == "realtime":
+        from controller.balance.follow import follow
+        from controller.balance.run import window_summary
+
+        run = follow(model, qpos, motion.fps, config=config)
+        summary = window_summary(run, start, stop)
+        fall_frame, n_frames = run.fall_frame, run.n_frames
+
+        def whole_run():
+            return window_summary(run, 0, n_frames)
+    else:
+        raise ValueError(f"unknown effort {effort!r} (efforts: {', '.join(EFFORTS)})")
+    fell = fall_frame is not None
+    going_down = 0.0 if fell else whole_run()["ends_in_trouble"]
     return {
         "fell": 1.0 if fell else 0.0,
         "ends_in_trouble": going_down,
         "fell_or_going_down": 1.0 if fell or going_down == 1.0 else 0.0,
-        "fall_after_window_start_s": ((run.fall_frame - start) / motion.fps if fell
+        "fall_after_window_start_s": ((fall_frame - start) / motion.fps if fell
                                       else math.nan),
         **{name: summary[name] for name in PHYSICS_METRICS
            if name not in ("fell", "ends_in_trouble", "fell_or_going_down",
@@ -202,9 +227,10 @@ _WORKER: dict = {}
 
 
 def init_worker(config, pairs: dict, real_windows: dict,
-                controller_config: ControllerConfig = DEFAULT) -> None:
+                controller_config: ControllerConfig = DEFAULT,
+                effort: str = "realtime") -> None:
     """Load the study's data once per worker process (idempotent), and keep the
-    controller's configuration for its units."""
+    controller's configuration and effort for its units."""
     from eval.runs import single_threaded_blas
     from eval.study import prepare
 
@@ -213,13 +239,15 @@ def init_worker(config, pairs: dict, real_windows: dict,
         _WORKER.update(config=config, data=prepare(config), pairs=pairs,
                        real_windows=real_windows)
     _WORKER["controller_config"] = controller_config
+    _WORKER["effort"] = effort
 
 
 def run_unit(unit: Unit) -> dict[str, float]:
     """One unit in a worker (after :func:`init_worker`)."""
     model, motion, start, stop = unit_motion(_WORKER["data"], unit, _WORKER["pairs"],
                                              _WORKER["real_windows"])
-    return simulate_unit(model, motion, start, stop, _WORKER["controller_config"])
+    return simulate_unit(model, motion, start, stop, _WORKER["controller_config"],
+                         _WORKER.get("effort", "realtime"))
 
 
 def records_of(units: list[Unit], done: dict[str, dict[str, float]],
@@ -293,6 +321,8 @@ class PhysicsResult:
         Wall time of the units run now.
     controller_config : controller.config.ControllerConfig
         The balance controller's configuration.
+    effort : str
+        The free-root body's effort (:data:`EFFORTS`).
     """
 
     records: Records
@@ -305,12 +335,14 @@ class PhysicsResult:
     workers: int
     wall_s: float
     controller_config: ControllerConfig = DEFAULT
+    effort: str = "realtime"
 
 
 def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                 address: str | None = None, workers: int | None = None,
                 show_progress: bool = True,
-                controller_config: ControllerConfig = DEFAULT) -> PhysicsResult:
+                controller_config: ControllerConfig = DEFAULT,
+                effort: str = "realtime") -> PhysicsResult:
     """Run the free-root test on the first ``n_pairs`` pairs of a study.
 
     Parameters
@@ -328,7 +360,12 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     workers : int, optional
         Processes (local) or CPUs of a local Ray instance; default: the usable cores.
     controller_config : controller.config.ControllerConfig
-        The balance controller's tuning constants.
+        The balance controller's tuning constants (the offline effort: its ``offline``
+        section).
+    effort : str
+        ``"realtime"``: the balance controller; ``"offline"``: the offline effort's
+        sampling search (each run on ``controller_config.offline.threads`` threads: the
+        default workers are the usable cores divided by them).
 
     Raises
     ------
@@ -338,6 +375,8 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     """
     import time
 
+    if effort not in EFFORTS:
+        raise ValueError(f"unknown effort {effort!r} (efforts: {', '.join(EFFORTS)})")
     from eval.executor import make_executor
     from eval.pairs import draw_real_windows
     from eval.runs import default_workers
@@ -357,16 +396,17 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     skipped = [u for u in every if u.key not in kept]
     settings = {"data": Path(config.data_dir).name, "seed": config.seed, "context_s": CONTEXT_S,
                 "alpha": config.as_dict()["alpha"],
-                "controller_config": controller_config.as_dict()}
+                "controller_config": controller_config.as_dict(), "effort": effort}
     checkpoint = Checkpoint(out_dir, settings, name=CHECKPOINT_NAME,
                             format_name=CHECKPOINT_FORMAT, version=CHECKPOINT_VERSION)
     resumed = checkpoint.load()
     todo = [u for u in units if u.key not in checkpoint.done]
-    workers = max(1, min(workers or default_workers(), max(1, len(todo))))
+    threads = controller_config.offline.threads if effort == "offline" else 1
+    workers = max(1, min(workers or default_workers() // threads, max(1, len(todo))))
     # This process already holds the data: forked workers inherit it.
     _WORKER.update(config=config, data=data, pairs=pairs, real_windows=real_windows)
     runner = make_executor(executor, workers, address, init_worker,
-                           (config, pairs, real_windows, controller_config))
+                           (config, pairs, real_windows, controller_config, effort))
     start = time.perf_counter()
     by_key = {u.key: u for u in todo}
     failures = [(by_key[key], error) for key, error in run_checkpointed(
@@ -385,4 +425,4 @@ def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
     return PhysicsResult(records=records, statistics=statistics, pairs=n_pairs,
                          real_windows=real_windows, checkpoint=checkpoint, resumed=resumed,
                          executor=executor, workers=workers, wall_s=wall,
-                         controller_config=controller_config)
+                         controller_config=controller_config, effort=effort)

@@ -64,14 +64,25 @@ def _table(header, rows) -> str:
     return "\n".join(lines)
 
 
-def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int) -> str:
-    """The free-root section of summary.md."""
+#: Who performs the motion in each effort of the free-root test, in words.
+PERFORMERS = {
+    "realtime": "the balance controller (controller.balance.follow: root free, no external "
+                "force, each joint's strength)",
+    "offline": "the offline effort (controller.offline.perform: root free, no external force, "
+               "each joint's strength; a sampling search over the servos' targets, the best "
+               "states kept, backtracking where all are in trouble)",
+}
+
+
+def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int,
+                     effort: str = "realtime") -> str:
+    """The free-root section of summary.md (``effort``: who performed the runs)."""
     reference = statistics.reference
     parts = [
-        "## Can the character perform it? The free-root test",
+        "## Can the character perform it? The free-root test"
+        + (" (offline effort)" if effort == "offline" else ""),
         "",
-        f"The first {n_pairs} pairs (and as many real windows): the balance controller "
-        f"(controller.balance.follow: root free, no external force, each joint's strength) follows "
+        f"The first {n_pairs} pairs (and as many real windows): {PERFORMERS[effort]} follows "
         f"each method's motion from {CONTEXT_S:g} s before the window to {CONTEXT_S:g} s "
         f"after it. Falls: share of runs in which the character fell (anywhere in the run); "
         f"going down: share of runs in which it did not fall but ended in trouble (the "

@@ -13,10 +13,18 @@ same on any machine). The wall time per simulated second is recorded per run, bu
 runs share the machine (``workers`` at once, each on one process): ``upm simulate`` and
 ``upm bench`` measure the cost alone.
 
-A unit of work is one (row, seed) (:class:`Unit`), run in a worker of :mod:`eval.executor`
-(a local pool or Ray) on one process of the controller (the same run as on two: the
-controller's rollouts give the same frames either way). Finished units are appended to a
-checkpoint in the output directory, so a stopped run resumes where it was.
+The same rows can be performed in the offline effort too (``efforts``): the sampling
+search over the servos' targets (:func:`controller.offline.perform`), which asks whether
+the body can perform the row at all, each run on ``offline.threads`` threads (its workers:
+the cores divided by them), on the exact reference and ``offline_seeds`` offset ones; its
+figures are the same by name, its search's work in rollouts and backtracks. ``max_s``
+keeps each row's first seconds, for both efforts alike (the offline effort costs tens of
+wall s per simulated s).
+
+A unit of work is one (row, seed, effort) (:class:`Unit`), run in a worker of
+:mod:`eval.executor` (a local pool or Ray) on one process of the controller (the same run
+as on two: the controller's rollouts give the same frames either way). Finished units are
+appended to a checkpoint in the output directory, so a stopped run resumes where it was.
 """
 
 from __future__ import annotations
@@ -35,6 +43,8 @@ CHECKPOINT_VERSION = 2
 OFFSET_DEG = 0.1
 #: The default number of offset seeds (besides the exact reference).
 OFFSET_SEEDS = 5
+#: Who performs the rows: the real-time balance controller, the offline effort's search.
+EFFORTS = ("realtime", "offline")
 
 
 class Row(NamedTuple):
@@ -144,6 +154,8 @@ class Settings:
         ``"matched"`` (:func:`upm.transitions.cuts.matched_pieces`).
     strength : float
         Every joint's torque limit times this (:func:`humanoid_xml.models.load_model`).
+    max_s : float or None
+        Each row's first ``max_s`` seconds only (None: whole).
     """
 
     data_dir: str
@@ -152,6 +164,7 @@ class Settings:
     controller_config: ControllerConfig = DEFAULT
     cut: str = "whole"
     strength: float = 1.0
+    max_s: float | None = None
 
     def as_dict(self) -> dict:
         import hashlib
@@ -163,23 +176,32 @@ class Settings:
             the_map = f"{Path(self.map_path).name} (sha256 {digest})"
         return {"data": Path(self.data_dir).name, "map": the_map,
                 "offset_deg": self.offset_deg, "cut": self.cut, "strength": self.strength,
-                "controller_config": self.controller_config.as_dict()}
+                "max_s": self.max_s, "controller_config": self.controller_config.as_dict()}
 
 
 class Unit(NamedTuple):
-    """One run: a row on its exact reference (seed 0) or moved by offset seed ``seed``."""
+    """One run: a row on its exact reference (seed 0) or moved by offset seed ``seed``,
+    performed in ``effort`` (:data:`EFFORTS`)."""
 
     row: Row
     seed: int
+    effort: str = "realtime"
 
     @property
     def key(self) -> str:
-        return f"{self.row.text}#{self.seed}"
+        key = f"{self.row.text}#{self.seed}"
+        return key if self.effort == "realtime" else f"{key}@{self.effort}"
 
 
-def task_list(rows, seeds: int) -> list[Unit]:
-    """Every run: each row at seed 0 and offset seeds 1 to ``seeds``, row by row."""
-    return [Unit(row, seed) for row in rows for seed in range(seeds + 1)]
+def task_list(rows, seeds: int, efforts=("realtime",), offline_seeds: int = 0) -> list[Unit]:
+    """Every run: each row at seed 0 and offset seeds 1 to ``seeds`` in the real-time
+    effort, row by row, then (if ``"offline"`` is in ``efforts``) at seed 0 and offset
+    seeds 1 to ``offline_seeds`` in the offline effort."""
+    units = []
+    for effort, last in (("realtime", seeds), ("offline", offline_seeds)):
+        if effort in efforts:
+            units += [Unit(row, seed, effort) for row in rows for seed in range(last + 1)]
+    return units
 
 
 #: Figures of one run (of :meth:`controller.balance.report.BalanceTracking.run_summary`).
@@ -226,6 +248,9 @@ def reference(settings: Settings, row: Row, seed: int):
             _WORKER["models"][path] = load_model(path, strength=settings.strength)
         _WORKER["sequences"][row] = (_WORKER["models"][path], sequence.motion)
     model, motion = _WORKER["sequences"][row]
+    if settings.max_s is not None:
+        motion = motion.frames(0, min(motion.n_frames,
+                                      int(round(settings.max_s * motion.fps)) + 1))
     if seed:
         motion = offset_joint_angles(motion, settings.offset_deg, seed)
     return model, motion
@@ -253,7 +278,9 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
     motion's length), ``wall_s``, ``search_gave_up``: the troubles the search gave up
     on (``{"time_s", "outcome"}`` each, the outcome ``"budget spent"`` or ``"no mode
     within reach"``; :class:`controller.balance.search.SearchTrouble`), and
-    ``search_by_mode``: :func:`search_by_mode` of its troubles."""
+    ``search_by_mode``: :func:`search_by_mode` of its troubles. A run of the offline
+    effort (:func:`eval.robustness_offline.offline_figures`) has the same figures where
+    they exist in it."""
     from controller.analysis import free_run
     from controller.qpos import to_qpos
     from eval.runs import single_threaded_blas
@@ -261,15 +288,22 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
     single_threaded_blas()
     model, motion = reference(settings, unit.row, unit.seed)
     config = settings.controller_config
-    tracking = free_run(model, to_qpos(model, motion), motion.fps, processes=1, config=config)
-    summary = tracking.run_summary()
-    out = {k: summary[k] for k in RUN_FIELDS}
-    out["search_gave_up"] = [{"time_s": trouble["time_s"], "outcome": trouble["outcome"]}
-                             for trouble in summary["search_troubles"]
-                             if trouble["outcome"] != "got past"]
-    out["search_by_mode"] = search_by_mode(summary["search_troubles"], len(config.modes))
+    qpos = to_qpos(model, motion)
+    if unit.effort == "offline":
+        from eval.robustness_offline import offline_figures
+
+        out = offline_figures(model, qpos, motion.fps, config, RUN_FIELDS)
+    else:
+        tracking = free_run(model, qpos, motion.fps, processes=1, config=config)
+        summary = tracking.run_summary()
+        out = {k: summary[k] for k in RUN_FIELDS}
+        out["search_gave_up"] = [{"time_s": trouble["time_s"], "outcome": trouble["outcome"]}
+                                 for trouble in summary["search_troubles"]
+                                 if trouble["outcome"] != "got past"]
+        out["search_by_mode"] = search_by_mode(summary["search_troubles"],
+                                               len(config.modes))
+        out["wall_s"] = round(tracking.run.wall_s, 3)
     out["seconds"] = round(motion.n_frames / motion.fps, 4)
-    out["wall_s"] = round(tracking.run.wall_s, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
             for k, v in out.items()}
 
@@ -284,6 +318,10 @@ class RobustnessResult:
     rows : list of Row
     seeds : int
         Offset seeds per row (besides seed 0).
+    efforts : tuple of str
+        The efforts the rows were performed in (:data:`EFFORTS`).
+    offline_seeds : int
+        Offset seeds per row of the offline effort.
     runs : dict of str to dict
         Every unit's figures by :attr:`Unit.key`.
     resumed : int
@@ -302,15 +340,21 @@ class RobustnessResult:
     workers: int
     executor: str
     wall_s: float
+    efforts: tuple = ("realtime",)
+    offline_seeds: int = 0
 
-    def run(self, row: Row, seed: int) -> dict:
-        return self.runs[Unit(row, seed).key]
+    def run(self, row: Row, seed: int, effort: str = "realtime") -> dict:
+        return self.runs[Unit(row, seed, effort).key]
 
 
 def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: str = "local",
                    address: str | None = None, workers: int | None = None,
-                   show_progress: bool = True) -> RobustnessResult:
-    """Run every row at seed 0 and offset seeds 1 to ``seeds``.
+                   show_progress: bool = True, efforts=("realtime",),
+                   offline_seeds: int = 0) -> RobustnessResult:
+    """Run every row at seed 0 and offset seeds 1 to ``seeds`` in the real-time effort,
+    and at seed 0 and offset seeds 1 to ``offline_seeds`` in the offline effort, as
+    ``efforts`` says (the real-time runs first; the offline ones on ``workers`` divided
+    by the configuration's ``offline.threads``).
 
     Raises
     ------
@@ -323,17 +367,29 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
     from eval.executor import make_executor
     from eval.runs import Checkpoint, StudyIncomplete, default_workers, run_checkpointed
 
-    units = task_list(rows, seeds)
+    efforts = tuple(e for e in EFFORTS if e in efforts)
+    if not efforts:
+        raise ValueError(f"no effort to run (efforts: {', '.join(EFFORTS)})")
+    units = task_list(rows, seeds, efforts, offline_seeds)
     checkpoint = Checkpoint(out_dir, settings.as_dict(), name=CHECKPOINT_NAME,
                             format_name=CHECKPOINT_FORMAT, version=CHECKPOINT_VERSION,
                             numbers=False)
     resumed = checkpoint.load()
-    todo = [u for u in units if u.key not in checkpoint.done]
-    workers = max(1, min(workers or default_workers(), max(1, len(todo))))
-    runner = make_executor(executor, workers, address)
+    cores = workers or default_workers()
     start = time.perf_counter()
-    failures = run_checkpointed(runner, run_unit, [(u.key, (settings, u)) for u in todo],
-                                checkpoint, "free-root runs", show_progress)
+    failures, used = [], 1
+    for effort in efforts:
+        todo = [u for u in units if u.effort == effort and u.key not in checkpoint.done]
+        if not todo:
+            continue
+        threads = settings.controller_config.offline.threads if effort == "offline" else 1
+        count = max(1, min(cores // threads if workers is None else cores, len(todo)))
+        used = max(used, count)
+        runner = make_executor(executor, count, address)
+        failures += run_checkpointed(
+            runner, run_unit, [(u.key, (settings, u)) for u in todo], checkpoint,
+            "free-root runs" if effort == "realtime" else "offline-effort runs",
+            show_progress)
     if failures:
         first, error = failures[0]
         raise StudyIncomplete(
@@ -342,5 +398,6 @@ def run_robustness(settings: Settings, rows, seeds: int, out_dir, *, executor: s
             "run the same command again to complete the rest")
     return RobustnessResult(settings=settings, rows=list(rows), seeds=seeds,
                             runs={u.key: checkpoint.done[u.key] for u in units},
-                            resumed=resumed, workers=workers, executor=executor,
-                            wall_s=time.perf_counter() - start)
+                            resumed=resumed, workers=used, executor=executor,
+                            wall_s=time.perf_counter() - start, efforts=efforts,
+                            offline_seeds=offline_seeds)

@@ -7,11 +7,12 @@ from __future__ import annotations
 from eval.robustness import RobustnessResult, Row
 
 
-def row_summary(result: RobustnessResult, row: Row) -> dict:
-    """One row's figures: seed 0's run, the offset runs' falls and when, the standing
-    runs' error ranges and the cost."""
-    exact = result.run(row, 0)
-    offsets = [result.run(row, s) for s in range(1, result.seeds + 1)]
+def row_summary(result: RobustnessResult, row: Row, effort: str = "realtime") -> dict:
+    """One row's figures in one effort: seed 0's run, the offset runs' falls and when, the
+    standing runs' error ranges and the cost."""
+    seeds = result.seeds if effort == "realtime" else result.offline_seeds
+    exact = result.run(row, 0, effort)
+    offsets = [result.run(row, s, effort) for s in range(1, seeds + 1)]
     runs = [exact, *offsets]
     up = [r for r in runs if not r["fell"]]
 
@@ -37,6 +38,7 @@ def row_summary(result: RobustnessResult, row: Row) -> dict:
         "standing_body_error_mm_mean_search_modes": span(
             r.get("body_error_mm_mean_search_modes") for r in up),
         "search_retries": span(r["search_retries"] for r in runs),
+        "search_backtracks": span(r.get("search_backtracks") for r in runs),
         "wall_s_per_sim_s": span(r["wall_s_per_sim_s"] for r in runs),
         "raw_steps_per_step": span(r["raw_steps_per_step"] for r in runs),
     }
@@ -59,23 +61,39 @@ def _budget_spent(run: dict) -> bool:
     return any(g["outcome"] == "budget spent" for g in run["search_gave_up"])
 
 
-def summary(result: RobustnessResult) -> dict:
-    """The study as JSON: settings, per-row figures, totals and every run."""
-    from controller.report import software_versions
+def _totals(rows: list[dict], runs) -> dict:
+    return {"falls": sum(r["falls"] for r in rows),
+            "runs": sum(r["runs"] for r in rows),
+            "falls_budget_spent": sum(r["falls_budget_spent"] for r in rows),
+            "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
+            "offset_falls": sum(r["offset_falls"] for r in rows),
+            "offset_runs": sum(r["offset_runs"] for r in rows),
+            "search_by_mode": summed_by_mode(runs)}
 
-    rows = [row_summary(result, row) for row in result.rows]
+
+def summary(result: RobustnessResult) -> dict:
+    """The study as JSON: settings, per-row figures, totals and every run. ``rows`` and
+    ``totals`` are the first effort's (the real-time one if it ran), ``by_effort`` every
+    effort's."""
+    from controller.report import software_versions
+    from eval.robustness import task_list
+
+    by_effort = {}
+    for effort in result.efforts:
+        rows = [row_summary(result, row, effort) for row in result.rows]
+        runs = [result.runs[u.key] for u in task_list(result.rows, result.seeds, (effort,),
+                                                       result.offline_seeds)]
+        by_effort[effort] = {"rows": rows, "totals": _totals(rows, runs)}
+    first = by_effort[result.efforts[0]]
     return {
-        "format": "upm-controller/robustness", "version": 2,
-        "settings": {**result.settings.as_dict(), "offset_seeds": result.seeds},
+        "format": "upm-controller/robustness", "version": 3,
+        "settings": {**result.settings.as_dict(), "offset_seeds": result.seeds,
+                     "efforts": list(result.efforts),
+                     "offline_offset_seeds": result.offline_seeds},
         "software": software_versions(),
-        "totals": {"falls": sum(r["falls"] for r in rows),
-                   "runs": sum(r["runs"] for r in rows),
-                   "falls_budget_spent": sum(r["falls_budget_spent"] for r in rows),
-                   "exact_falls": sum(bool(r["exact"]["fell"]) for r in rows),
-                   "offset_falls": sum(r["offset_falls"] for r in rows),
-                   "offset_runs": sum(r["offset_runs"] for r in rows),
-                   "search_by_mode": summed_by_mode(result.runs.values())},
-        "rows": rows,
+        "totals": first["totals"],
+        "rows": first["rows"],
+        "by_effort": by_effort,
         "runs": result.runs,
     }
 
@@ -88,9 +106,61 @@ def _fmt_span(span, digits: int) -> str:
         f"{lo:.{digits}f}-{hi:.{digits}f}"
 
 
-def table_markdown(report: dict) -> str:
-    """The per-row table (markdown)."""
+def _exact_cell(r: dict) -> str:
+    e = r["exact"]
+    if e["fell"]:
+        return f"falls at {e['fall_time_s']:.2f} s"
+    return (f"stands, {e['error_deg_rms']:.1f} / {e['body_error_mm_mean']:.0f}"
+            + (", ends going down" if e["ends_in_trouble"] else ""))
+
+
+def efforts_table_markdown(report: dict) -> str:
+    """The per-row table of every effort side by side (markdown): seed 0's run in each
+    effort (stands, with its joint / body error in deg / mm, or falls and when), the
+    offset runs' falls where there are any, and the offline search's cost."""
     s = report["settings"]
+    efforts = s["efforts"]
+    seeds = {"realtime": s["offset_seeds"], "offline": s.get("offline_offset_seeds", 0)}
+    names = {"realtime": "real time", "offline": "offline"}
+    header, rule = ["row", "s"], ["---", "---"]
+    for effort in efforts:
+        header.append(f"{names[effort]}, exact reference (deg / mm)")
+        if seeds[effort]:
+            header.append(f"{names[effort]}: falls of {seeds[effort]} offset runs")
+        if effort == "offline":
+            header.append("offline: wall s per simulated s")
+    rule = ["---"] * len(header)
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join(rule) + "|"]
+    rows = {e: report["by_effort"][e]["rows"] for e in efforts}
+    for i, first in enumerate(rows[efforts[0]]):
+        cells = [first["label"], f"{first['seconds']:.1f}"]
+        for effort in efforts:
+            r = rows[effort][i]
+            cells.append(_exact_cell(r))
+            if seeds[effort]:
+                when = ", ".join(f"{t:.2f}" for t in r["offset_fall_times_s"])
+                cells.append(f"{r['offset_falls']}" + (f" ({when})" if when else ""))
+            if effort == "offline":
+                cells.append(_fmt_span(r["wall_s_per_sim_s"], 1))
+        lines.append("| " + " | ".join(cells) + " |")
+    lines.append("")
+    for effort in efforts:
+        t = report["by_effort"][effort]["totals"]
+        n = len(rows[effort])
+        lines.append(f"{names[effort].capitalize()}: {t['exact_falls']} of {n} exact "
+                     f"references fall" + (f", {t['offset_falls']} of {t['offset_runs']} "
+                                           "offset runs" if t["offset_runs"] else "") + ".")
+    if s.get("max_s") is not None:
+        lines.append(f"Each row's first {s['max_s']:g} s (`--max-s`).")
+    return "\n".join(lines) + "\n"
+
+
+def table_markdown(report: dict) -> str:
+    """The per-row table (markdown): the real-time effort's, or every effort's side by
+    side (:func:`efforts_table_markdown`) when the offline effort ran."""
+    s = report["settings"]
+    if s.get("efforts", ["realtime"]) != ["realtime"]:
+        return efforts_table_markdown(report)
     k = s["offset_seeds"]
     lines = [
         f"| row | s | exact reference (seed 0) | falls of {k} offset runs, when (s) | "
@@ -154,8 +224,13 @@ def _by_mode_markdown(by_mode: dict, controller_config: dict | None) -> list[str
     return lines
 
 
+#: Each effort's lane in the figure: offset from the row's line, colour, exact marker.
+_LANES = {"realtime": (0.0, "black", "D"), "offline": (0.22, "tab:blue", "s")}
+
+
 def plot(report: dict, path) -> None:
-    """Each row's length and its falls: seed 0 (a diamond) and the offset seeds (dots)."""
+    """Each row's length and its falls: seed 0 (a diamond) and the offset seeds (dots);
+    with the offline effort, its runs on a lane of their own under the row (squares)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -163,26 +238,41 @@ def plot(report: dict, path) -> None:
 
     from upm.core.fileio import atomic_path
 
+    efforts = report["settings"].get("efforts", ["realtime"])
+    by_effort = report.get("by_effort", {"realtime": {"rows": report["rows"]}})
     rows = report["rows"]
-    fig, ax = plt.subplots(figsize=(8, 0.4 * len(rows) + 1.4))
-    for y, r in enumerate(rows):
-        ax.plot([0, r["seconds"]], [y, y], color="0.8", lw=6, solid_capstyle="butt")
-        times = r["offset_fall_times_s"]
-        ax.plot(times, [y] * len(times), "o", color="tab:red", ms=5, alpha=0.7)
-        if r["exact"]["fell"]:
-            ax.plot([r["exact"]["fall_time_s"]], [y], "D", color="black", ms=6)
-        ax.text(r["seconds"] + 0.1, y, f"{r['falls']}/{r['runs']}", va="center", fontsize=8)
-    ax.plot([], [], "o", color="tab:red", ms=5, label="fall, offset reference")
-    ax.plot([], [], "D", color="black", ms=6, label="fall, exact reference")
+    both = len(efforts) > 1
+    fig, ax = plt.subplots(figsize=(8, (0.5 if both else 0.4) * len(rows) + 1.4))
+    for effort in efforts:
+        shift, colour, marker = _LANES[effort] if both else (0.0, "black", "D")
+        for y, r in enumerate(by_effort[effort]["rows"]):
+            y = y + shift
+            ax.plot([0, r["seconds"]], [y, y], color="0.8", lw=6 if not both else 4,
+                    solid_capstyle="butt")
+            times = r["offset_fall_times_s"]
+            ax.plot(times, [y] * len(times), "o", color="tab:red", ms=5, alpha=0.7)
+            if r["exact"]["fell"]:
+                ax.plot([r["exact"]["fall_time_s"]], [y], marker, color=colour, ms=6)
+            ax.text(r["seconds"] + 0.1, y, f"{r['falls']}/{r['runs']}", va="center",
+                    fontsize=7 if both else 8, color=colour)
+    if any(by_effort[e]["rows"][i]["offset_runs"] for e in efforts for i in range(len(rows))):
+        ax.plot([], [], "o", color="tab:red", ms=5, label="fall, offset reference")
+    for effort in efforts:
+        _, colour, marker = _LANES[effort] if both else (0.0, "black", "D")
+        name = "real time" if effort == "realtime" else "offline effort"
+        ax.plot([], [], marker, color=colour, ms=6, label=f"fall, exact reference ({name})"
+                if both else "fall, exact reference")
     ax.set_yticks(range(len(rows)), [r["label"] for r in rows], fontsize=8)
-    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_ylim(len(rows) - 0.5 + (0.25 if both else 0.0), -0.5)
     ax.set_xlim(0, 1.1 * max(r["seconds"] for r in rows))
     ax.set_xlabel("time of the fall in the run, s (grey: the row's length; right: falls "
-                  "of runs)")
-    ax.set_title(f"Falls of the free-root character: exact reference and "
-                 f"{report['settings']['offset_seeds']} offset ones, "
-                 f"N(0, {report['settings']['offset_deg']:g} deg)", fontsize=9)
-    fig.legend(fontsize=8, loc="lower center", ncol=2, frameon=False)
+                  "of runs)" + ("; upper lane real time, lower lane offline" if both else ""))
+    s = report["settings"]
+    what = (f"exact reference and {s['offset_seeds']} offset ones, "
+            f"N(0, {s['offset_deg']:g} deg)" if s["offset_seeds"] else "exact references")
+    ax.set_title(f"Falls of the free-root character: {what}"
+                 + (" - real time and offline" if both else ""), fontsize=9)
+    fig.legend(fontsize=8, loc="lower center", ncol=3 if both else 2, frameon=False)
     fig.tight_layout(rect=(0, 0.25 / fig.get_figheight(), 1, 1))
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)

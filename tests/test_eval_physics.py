@@ -82,7 +82,7 @@ def test_a_failed_run_is_named_kept_and_completed_by_a_rerun(study, tmp_path, mo
 
     calls = []
 
-    def failing(model, motion, start, stop, config):
+    def failing(model, motion, start, stop, config, effort):
         unit = calls[-1]
         if unit.kind == "pair" and unit.index == 1 and unit.method == "linear":
             raise RuntimeError("the simulation diverged")
@@ -105,7 +105,7 @@ def test_a_failed_run_is_named_kept_and_completed_by_a_rerun(study, tmp_path, mo
 
     calls.clear()
     monkeypatch.setattr(physics, "simulate_unit",
-                        lambda model, motion, start, stop, config: _fake_figures(calls[-1]))
+                        lambda model, motion, start, stop, config, effort: _fake_figures(calls[-1]))
     result = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
     assert [(u.kind, u.index, u.method) for u in calls] == [("pair", 1, "linear")]
     assert result.resumed == total - 1
@@ -121,8 +121,9 @@ def test_the_controller_configuration_reaches_the_workers_and_keys_the_checkpoin
     from controller.config import DEFAULT
     from eval.outputs import physics_document
 
-    def figures_of(model, motion, start, stop, config):
-        return {name: config.placement.gain for name in PHYSICS_METRICS} | {
+    def figures_of(model, motion, start, stop, config, effort):
+        value = config.placement.gain + (1.0 if effort == "offline" else 0.0)
+        return {name: value for name in PHYSICS_METRICS} | {
             "fell": 0.0, "fall_after_window_start_s": math.nan}
 
     monkeypatch.setattr(physics, "simulate_unit", figures_of)
@@ -137,6 +138,38 @@ def test_the_controller_configuration_reaches_the_workers_and_keys_the_checkpoin
     default = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
     assert default.resumed == 0
     assert set(default.records.values("real", 20, "real", "joint_error_deg_rms")) == {0.3}
+    # the effort keys the checkpoint too, and reaches the workers
+    offline = run_physics(study, PAIRS, tmp_path, workers=2, show_progress=False,
+                          effort="offline")
+    assert offline.resumed == 0
+    assert set(offline.records.values("real", 20, "real", "joint_error_deg_rms")) == {1.3}
+    assert physics_document(offline)["protocol"]["effort"] == "offline"
+    assert physics_document(default)["protocol"]["effort"] == "realtime"
+
+
+def test_the_offline_effort_performs_a_real_window_with_the_same_figures(study):
+    """One real window of the study performed by the offline effort (a small search: 24
+    samples, one pass), scored with the real-time test's figures: every figure is there,
+    the body stands on the floor (about one body weight on it) and follows the window
+    within a few degrees."""
+    from controller.config import DEFAULT
+    from eval.pairs import draw_real_windows
+    from eval.physics import Unit, context_frames, simulate_unit, unit_motion
+
+    real = {20: draw_real_windows(study.data.lengths, PAIRS, 20, study.config.seed,
+                                  context=context_frames(120.0))}
+    window = real[20][0]
+    model, motion, start, stop = unit_motion(study.data, Unit("real", window.index, 20,
+                                                              "real"), {}, real)
+    small = DEFAULT.updated({"offline": {"samples": 24, "keep": 4, "budget": 1.0}})
+    figures = simulate_unit(model, motion, start, stop, small, effort="offline")
+    assert set(figures) == set(PHYSICS_METRICS)
+    assert figures["fell"] == 0.0, figures
+    assert 0.8 < figures["contact_force_peak_bw"] < 4.0, figures
+    assert 0.0 < figures["joint_error_deg_rms"] < 12.0, figures
+    assert 0.0 <= figures["torque_saturation_share"] <= 1.0
+    with pytest.raises(ValueError, match="unknown effort 'fast'"):
+        simulate_unit(model, motion, start, stop, small, effort="fast")
 
 
 def test_the_long_form_table_refuses_a_misspelt_metric():

@@ -179,6 +179,12 @@ def test_strength_is_a_setting_of_the_study(data_dir):
     (["--seeds", "-1"], "--seeds"),
     (["--strength", "0"], "--strength 0"),
     (["--config", "nosuch.toml"], "nosuch.toml: cannot read the configuration"),
+    (["--offline-seeds", "1"], "--offline-seeds is the offline effort's"),
+    (["--threads", "2"], "--threads is the offline effort's"),
+    (["--effort", "both", "--threads", "0"], "--threads 0"),
+    (["--effort", "offline", "--offline-seeds", "-1"], "--offline-seeds must be"),
+    (["--max-s", "0"], "--max-s 0"),
+    (["--effort", "offline", "--search-budget", "2"], "--search-budget is the real-time"),
 ])
 def test_bad_input_is_one_line_exit_2(data_dir, tmp_path, args, message):
     result = subprocess.run([sys.executable, "-m", "upm", "robustness", "--data",
@@ -228,3 +234,33 @@ def test_cut_matched_runs_the_sequence_on_pieces_cut_at_the_next_ones_phase(data
     # 02_01 ends earlier than its frame 200: the sequence is shorter than the whole pieces'
     assert run["seconds"] < (200 + 20 + 60) / 120
     assert "cut where the next one's gait phase matches" in printed
+
+
+def test_both_efforts_perform_every_row_side_by_side(data_dir, tmp_path, capsys):
+    """``--effort both``: each row by the real-time controller and by the offline effort
+    (a small search here: 24 samples, one pass), on the row's first ``--max-s`` seconds;
+    the offline runs carry the same figures by name, the report a table with both and
+    each effort's totals, and the checkpoint keys each effort's runs apart."""
+    config = tmp_path / "small.toml"
+    config.write_text("[offline]\nsamples = 24\nkeep = 4\nbudget = 1.0\n")
+    out = tmp_path / "r"
+    assert main(["robustness", "--data", str(data_dir), "--rows", "02_01", "--seeds", "0",
+                 "--effort", "both", "--max-s", "0.5", "--config", str(config),
+                 "--threads", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    report = json.loads((out / "robustness.json").read_text())
+    assert report["settings"]["efforts"] == ["realtime", "offline"]
+    assert report["settings"]["max_s"] == 0.5
+    assert set(report["runs"]) == {"02_01#0", "02_01#0@offline"}
+    realtime, offline = report["runs"]["02_01#0"], report["runs"]["02_01#0@offline"]
+    for run in (realtime, offline):
+        assert run["seconds"] == pytest.approx(61 / 120, abs=1e-4)
+        assert not run["fell"] and run["ends_in_trouble"] in (False, 0.0)
+        assert 0.0 < run["error_deg_rms"] < 10.0
+    assert offline["search_rollouts"] > 0 and offline["search_retries"] is None
+    rows = report["by_effort"]["offline"]["rows"]
+    assert rows[0]["exact"] == offline and report["rows"][0]["exact"] == realtime
+    assert report["by_effort"]["offline"]["totals"]["exact_falls"] == 0
+    assert "offline, exact reference" in printed and "Offline: 0 of 1 exact" in printed
+    assert "Each row's first 0.5 s" in printed
+    assert (out / "robustness.png").stat().st_size > 0

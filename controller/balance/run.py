@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.balance.control import torque_model
+from controller.body import floor_normal_force
 from controller.config import DEFAULT, ControllerConfig
 
 WINDOW_KEYS = ("fell", "fall_time_s", "joint_error_deg_rms", "body_error_mm_mean",
@@ -338,18 +339,3 @@ class FrameLog:
         self.limit_rows[stop_frame:] = 0
         self.self_contacts[stop_frame:] = 0
         self.trouble[stop_frame:] = False
-
-
-def floor_normal_force(model, data) -> float:
-    """Total normal force of the floor on the body, N."""
-    import mujoco
-
-    total = 0.0
-    force = np.zeros(6)
-    geom_body = model.geom_bodyid
-    for i in range(data.ncon):
-        g = data.contact.geom[i]
-        if (geom_body[g[0]] == 0) != (geom_body[g[1]] == 0):
-            mujoco.mj_contactForce(model, data, i, force)
-            total += force[0]
-    return total

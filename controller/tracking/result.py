@@ -68,6 +68,8 @@ class Tracking:
         The configuration the simulation was made with (its physics step and fall rule).
     saturated_actuators : ndarray, shape (T,), or None
         Share of the actuators at their force limit at each frame (None: not recorded).
+    floor_force_n : ndarray, shape (T,), or None
+        Total normal force of the floor on the body at each frame, N (None: not recorded).
     """
 
     mode: str
@@ -97,6 +99,7 @@ class Tracking:
     messages: tuple[str, ...] = ()
     config: ControllerConfig = DEFAULT
     saturated_actuators: np.ndarray | None = None
+    floor_force_n: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:

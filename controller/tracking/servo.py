@@ -154,7 +154,7 @@ def track_plan(model, plan: TrackingPlan, config: ControllerConfig = DEFAULT) ->
                               config.falls),
         diverged_frame=diverged, warnings=warning_counts(data),
         messages=tuple(dict.fromkeys(messages))[:10], config=config,
-        saturated_actuators=record.saturated,
+        saturated_actuators=record.saturated, floor_force_n=record.floor_force,
     )
 
 
@@ -178,13 +178,17 @@ class _FrameRecorder:
         self.pelvis = np.full(n_frames, np.nan)
         self.head = np.full(n_frames, np.nan)
         self.saturated = np.zeros(n_frames)
+        self.floor_force = np.full(n_frames, np.nan)
         limited = np.asarray(model.actuator_forcelimited, dtype=bool)
         self.force_limit = np.where(limited, np.abs(model.actuator_forcerange).max(axis=1),
                                     np.inf)
         self.joint_frames = np.zeros(model.njnt, dtype=int)
 
     def __call__(self, data, t: int) -> None:
+        from controller.body import floor_normal_force
+
         self.qpos[t] = data.qpos
+        self.floor_force[t] = floor_normal_force(self.model, data)
         ncon = data.ncon
         if ncon:
             bodies = self.model.geom_bodyid[np.asarray(data.contact.geom[:ncon])]

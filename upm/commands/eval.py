@@ -62,11 +62,21 @@ same command completes only what is missing. --config FILE.toml changes the bala
 controller's tuning constants for the free-root test (recorded in results.json and in the
 checkpoint: a run with another configuration starts afresh).
 
+--effort offline has the free-root test performed by the offline effort instead of the
+real-time controller: a sampling search over the servos' targets (controller.offline, its
+[offline] section of --config) that asks whether the body can perform the motion at all.
+It costs about 20 wall s a run on two threads (30 pairs of 4 methods and their real
+windows: 150 runs, about 50 minutes on 2 cores); choose the methods with --methods. The
+default stays the real-time controller, for its cost; the checkpoint keeps the effort (a
+run of the other effort starts afresh).
+
 Examples:
   upm eval --out upm-eval
   upm eval --full --out upm-eval-full
   upm eval --pairs 100 --windows 10,20 --seed 1 --workers 2 --out study
   upm eval --physics --pairs 60 --out upm-eval-physics
+  upm eval --physics --effort offline --pairs 30 --methods upm linear slerp feasible \
+      --out upm-eval-offline
   upm eval --physics --pairs 60 --executor ray --address ray://head-node:10001
 """
 
@@ -121,7 +131,16 @@ def configure(parser) -> None:
     parser.add_argument("--physics-pairs", type=int, metavar="N", default=None,
                         help="pairs that get the free-root test: the study's first N "
                              "(default: all of --pairs)")
-    add_config_argument(parser, "the balance controller of the --physics test (the "
+    parser.add_argument("--effort", choices=("realtime", "offline"), default=None,
+                        help="who performs the --physics runs: 'realtime' (default) the "
+                             "real-time balance controller; 'offline' the offline effort's "
+                             "sampling search over the servos' targets (about 15 wall s per "
+                             "simulated s on two threads: some 20 s a run)")
+    parser.add_argument("--threads", metavar="N", type=int, default=None,
+                        help="threads of each offline run's rollouts (default: [offline] "
+                             "threads, 2; the workers default to the cores divided by them; "
+                             "the figures do not depend on either)")
+    add_config_argument(parser, "the free-root body of the --physics test (the "
                                 "kinematic scores keep their own checks)")
     parser.add_argument("--executor", choices=("local", "ray"), default="local",
                         help="where the work runs: a local process pool (default) or Ray")
@@ -200,7 +219,16 @@ def run(args) -> int:
     if args.config is not None and not args.physics:
         raise UsageError("--config sets the free-root test's controller: it goes with "
                          "--physics")
-    physics_config = controller_config(args, unused=("residual", "window_runs"))
+    effort = args.effort or "realtime"
+    if args.effort is not None and not args.physics:
+        raise UsageError("--effort goes with --physics (the free-root test's performer)")
+    if args.threads is not None:
+        if effort != "offline":
+            raise UsageError("--threads is the offline effort's: add --physics --effort offline")
+        if not 1 <= args.threads <= 64:
+            raise UsageError(f"--threads {args.threads}: use a whole number from 1 to 64")
+    physics_config = controller_config(args, unused=("residual", "window_runs")
+                                       ).with_threads(args.threads)
     from eval.executor import check_executor
 
     check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
@@ -223,10 +251,11 @@ def run(args) -> int:
             from eval.physics import run_physics
 
             print(f"upm eval: free-root test on {physics_pairs} pairs x {len(methods)} "
-                  f"methods + real windows ({args.executor})", file=sys.stderr)
+                  f"methods + real windows ({effort} effort, {args.executor})",
+                  file=sys.stderr)
             physics = run_physics(result, physics_pairs, out, executor=args.executor,
                                   address=args.address, workers=args.workers,
-                                  controller_config=physics_config)
+                                  controller_config=physics_config, effort=effort)
     report = write_outputs(result, out, figures=args.figures, physics=physics)
     if physics is not None:
         physics.checkpoint.remove()
@@ -260,8 +289,10 @@ def run(args) -> int:
     if physics is not None:
         from eval.physics_report import physics_text
 
-        print(f"Free-root test: {physics_pairs} pairs, window {frames} frames (the balance "
-              f"controller, {physics.workers} {physics.executor} workers, "
+        performer = ("the offline effort" if effort == "offline"
+                     else "the balance controller")
+        print(f"Free-root test: {physics_pairs} pairs, window {frames} frames ({performer}, "
+              f"{physics.workers} {physics.executor} workers, "
               f"{physics.wall_s:.0f} s" + (f", {physics.resumed} runs resumed" if
                                            physics.resumed else "") + "):")
         print(physics_text(physics.statistics, frames, methods))

@@ -23,11 +23,20 @@ come: the same command, stopped or failed, completes only what is missing.
 --config FILE.toml changes the balance controller's tuning constants (recorded in
 robustness.json's settings; the checkpoint of another configuration is not resumed).
 
+--effort offline (or both, side by side) performs the rows in the offline effort too: the
+sampling search over the servos' targets (the configuration's [offline] section), which
+asks whether the body can perform the row at all, on the exact reference and
+--offline-seeds offset ones (default 0), each run on --threads threads (default 2; the
+workers default to the cores divided by them). It costs about 20-35 wall s per simulated
+second on 2 cores: '--rows all --effort both --seeds 0 --max-s 4' (every clip's first 4 s)
+takes about an hour. --max-s S keeps each row's first S seconds, for both efforts.
+
 Examples:
   upm robustness --out upm-robustness
   upm robustness --rows 05_01 16_15+16_15 --seeds 10 --out r
   upm robustness --rows all --seeds 0 --out every-clip
   upm robustness --rows 02_01@0:240 --seeds 2 --workers 1 --out quick
+  upm robustness --rows all --effort both --seeds 0 --max-s 4 --out every-clip-both
 """
 
 from __future__ import annotations
@@ -79,6 +88,20 @@ def configure(parser) -> None:
     parser.add_argument("--address", metavar="ADDR", default=None,
                         help="an existing Ray cluster (with --executor ray): ray://HEAD:10001 "
                              "(Ray Client) or HEAD:6379 (the head's GCS), as upm eval's")
+    parser.add_argument("--effort", choices=("realtime", "offline", "both"),
+                        default="realtime",
+                        help="who performs the rows: 'realtime' (default) the balance "
+                             "controller; 'offline' the offline effort's sampling search "
+                             "(tens of wall s per simulated s); 'both' side by side")
+    parser.add_argument("--offline-seeds", type=int, metavar="K", default=None,
+                        help="offset references per row in the offline effort, besides the "
+                             "exact one (default 0)")
+    parser.add_argument("--threads", metavar="N", type=int, default=None,
+                        help="threads of each offline run's rollouts (default: [offline] "
+                             "threads, 2; the figures do not depend on it)")
+    parser.add_argument("--max-s", metavar="S", type=float, default=None,
+                        help="each row's first S seconds only, in every effort (default: "
+                             "whole)")
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="skip robustness.png")
 
@@ -113,7 +136,25 @@ def run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
-    config = controller_config(args, unused=("residual", "window_runs"))
+    efforts = ("realtime", "offline") if args.effort == "both" else (args.effort,)
+    if "offline" not in efforts:
+        for flag, value in (("--offline-seeds", args.offline_seeds),
+                            ("--threads", args.threads)):
+            if value is not None:
+                raise UsageError(f"{flag} is the offline effort's: add --effort offline "
+                                 "or --effort both")
+    offline_seeds = 0 if args.offline_seeds is None else args.offline_seeds
+    if not 0 <= offline_seeds <= 100:
+        raise UsageError(f"--offline-seeds must be from 0 to 100, not {offline_seeds}")
+    if args.threads is not None and not 1 <= args.threads <= 64:
+        raise UsageError(f"--threads {args.threads}: use a whole number from 1 to 64")
+    if args.max_s is not None and not (math.isfinite(args.max_s) and args.max_s > 0):
+        raise UsageError(f"--max-s {args.max_s:g}: use a number of seconds above 0")
+    if efforts == ("offline",) and args.search_budget is not None:
+        raise UsageError("--search-budget is the real-time controller's: with --effort "
+                         "offline the search's budget is [offline] budget in --config")
+    config = controller_config(args, unused=("residual", "window_runs")
+                               ).with_threads(args.threads)
     from eval.executor import check_executor
 
     check_executor(args.executor, args.address)  # Ray, and the cluster there, before loading
@@ -124,15 +165,23 @@ def run(args) -> int:
             raise UsageError(f"--rows: {piece} is one frame: nothing to simulate")
     settings = Settings(data_dir=str(catalog.root.resolve()), map_path=args.map,
                         offset_deg=float(args.offset_deg), controller_config=config,
-                        cut=args.cut, strength=strength)
-    print(f"upm robustness: {len(rows)} rows x {args.seeds + 1} references (exact + "
-          f"{args.seeds} offset by N(0, {args.offset_deg:g} deg))", file=sys.stderr)
+                        cut=args.cut, strength=strength, max_s=args.max_s)
+    parts = []
+    if "realtime" in efforts:
+        parts.append(f"real time: {args.seeds + 1} references (exact + {args.seeds} offset by "
+                     f"N(0, {args.offset_deg:g} deg))")
+    if "offline" in efforts:
+        parts.append(f"offline effort: {offline_seeds + 1} references")
+    print(f"upm robustness: {len(rows)} rows; " + "; ".join(parts)
+          + (f"; each row's first {args.max_s:g} s" if args.max_s is not None else ""),
+          file=sys.stderr)
     from eval.executor import executor_session
     from eval.runs import default_workers
 
     with executor_session(args.executor, args.workers or default_workers(), args.address):
         result = run_robustness(settings, rows, args.seeds, out, executor=args.executor,
-                                address=args.address, workers=args.workers)
+                                address=args.address, workers=args.workers,
+                                efforts=efforts, offline_seeds=offline_seeds)
     report = summary(result)
     out.mkdir(parents=True, exist_ok=True)
     with atomic_path(out / "robustness.json") as tmp:
