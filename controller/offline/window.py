@@ -12,13 +12,16 @@ import numpy as np
 from controller.config import DEFAULT, ControllerConfig
 
 
-def trouble_frames(result, reference_qpos, config: ControllerConfig = DEFAULT) -> np.ndarray:
+def trouble_frames(model, result, reference_qpos,
+                   config: ControllerConfig = DEFAULT) -> np.ndarray:
     """Frames at which the performed body is in trouble by the real-time search's test
     (:func:`controller.balance.search.trouble_rule`: the pelvis or the head well below the
     reference's, or the pelvis tilted well beyond the reference's tilt).
 
     Parameters
     ----------
+    model : mujoco.MjModel
+        The humanoid the run was made on.
     result : controller.offline.OfflineResult
     reference_qpos : ndarray, shape (T, nq)
         The reference the run followed.
@@ -31,16 +34,17 @@ def trouble_frames(result, reference_qpos, config: ControllerConfig = DEFAULT) -
         False where the run has no state (after a divergence).
     """
     from controller.balance.search import tilt_limits, up_axis_z
+    from controller.qpos import joint_layout
 
     run = result.tracking
+    quat = slice(joint_layout(model).free_qpos + 3, joint_layout(model).free_qpos + 7)
     settings = config.search
     ref = np.asarray(reference_qpos, dtype=float)
-    # the free joint leads qpos in the humanoid (controller.qpos.joint_layout)
-    up = up_axis_z(np.nan_to_num(result.qpos[:, 3:7], nan=1.0))
+    up = up_axis_z(np.nan_to_num(result.qpos[:, quat], nan=1.0))
     with np.errstate(invalid="ignore"):
         low = run.reference_pelvis_height_m - run.pelvis_height_m > settings.trouble_drop_m
         bent = run.reference_head_height_m - run.head_height_m > settings.trouble_head_drop_m
-    tilted = up < tilt_limits(up_axis_z(ref[:, 3:7]), settings)
+    tilted = up < tilt_limits(up_axis_z(ref[:, quat]), settings)
     return (low | bent | tilted) & np.isfinite(result.qpos[:, 0])
 
 
@@ -88,7 +92,7 @@ def window_figures(model, result, reference_qpos, start_frame: int, stop_frame: 
     if run.fall_frame is not None:
         up = up[up < run.fall_frame]
     fell = run.fall_frame is not None and run.fall_frame <= stop - 1
-    trouble = trouble_frames(result, reference_qpos, config)
+    trouble = trouble_frames(model, result, reference_qpos, config)
     weight_n = body_figures(model).weight_n
     floor = (run.floor_force_n if run.floor_force_n is not None
              else np.full(n, np.nan))
