@@ -201,15 +201,20 @@ def summary_markdown(result_meta: dict, statistics: Summaries) -> str:
         "differences in residual force and foot skating between methods come from the joint "
         "angles alone; their level is set mostly by that shared root and by the data (see "
         "the calibration rows).",
-        "- Valid frames: an excess beyond the ASF limits counts only where it is beyond what "
-        "the two end postures already have (real CMU frames often break their limits); "
-        "self-collision and floor penetration count as they are. Clip 2's first posture B on "
+        "- Valid frames (the calibrated verdict, `upm calibrate`): an excess beyond the human "
+        "range of motion counts only where it is beyond what the two end postures already "
+        "have; a self-contact counts where it is deeper than its body pair's soft-tissue "
+        "allowance, a geom under the floor where it is deeper than its class allows. The "
+        "frames beyond the ASF's declared limits are reported apart, not judged. Clip 2's "
+        "first posture B on "
         f"clip 1's body is itself in self-collision in {ends['B']} of {protocol['pairs']} "
         f"pairs (A in {ends['A']}): 'valid (added only)' also counts only self-collisions "
         "between body pairs in contact at neither end.",
-        "- Linear and slerp stay between A and B on every DOF, so they add a limit excess "
-        "only where the short way round crosses a DOF's excluded arc; a window that moves "
-        "through a key posture, as real motion does, can add more.",
+        "- Linear and slerp stay between A and B on every DOF, so they add an excess of a "
+        "per-DOF range only where the short way round crosses a DOF's excluded arc, and of a "
+        "coupled rule (the hips' and shoulders') where the blend of two admissible postures "
+        "is not; a window that moves through a key posture, as real motion does, can add "
+        "more.",
         "- Jerk: third differences at 120 fps amplify the capture noise, so real windows "
         "score above any smooth window; the metric ranks methods against each other (a C0 "
         "join shows as a velocity jump).",
