@@ -266,12 +266,13 @@ def plot(report: dict, path) -> None:
     ax.set_ylim(len(rows) - 0.5 + (0.25 if both else 0.0), -0.5)
     ax.set_xlim(0, 1.1 * max(r["seconds"] for r in rows))
     ax.set_xlabel("time of the fall in the run, s (grey: the row's length; right: falls "
-                  "of runs)" + ("; upper lane real time, lower lane offline" if both else ""))
+                  "of runs)")
     s = report["settings"]
     what = (f"exact reference and {s['offset_seeds']} offset ones, "
             f"N(0, {s['offset_deg']:g} deg)" if s["offset_seeds"] else "exact references")
     ax.set_title(f"Falls of the free-root character: {what}"
-                 + (" - real time and offline" if both else ""), fontsize=9)
+                 + (" (upper lane real time, lower lane the offline effort)" if both else ""),
+                 fontsize=9)
     fig.legend(fontsize=8, loc="lower center", ncol=3 if both else 2, frameon=False)
     fig.tight_layout(rect=(0, 0.25 / fig.get_figheight(), 1, 1))
     with atomic_path(path) as tmp:
