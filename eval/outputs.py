@@ -294,7 +294,7 @@ def write_outputs(result: StudyResult, out_dir, figures: bool = True,
             report["physics"] = physics.statistics
             if figures:
                 plot_physics(stage / "physics.png", physics.statistics,
-                             figure_window(config.windows), config.methods)
+                             figure_window(config.windows), config.methods, physics.effort)
                 names.append("physics.png")
         with atomic_open(stage / "results.json", "w", encoding="utf-8",
                          newline="\n") as handle:

@@ -123,7 +123,8 @@ def physics_text(statistics: Summaries, frames: int, methods) -> str:
     return "\n".join(lines)
 
 
-def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, methods) -> None:
+def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, methods,
+                 effort: str = "realtime") -> None:
     """Falls (with the runs that end going down stacked on them), joint and body error per
     method beside the real windows (bars with 95 % intervals: of falls or going down in
     the first panel)."""
@@ -166,7 +167,8 @@ def plot_physics(path: str | os.PathLike, statistics: Summaries, frames: int, me
         ax.set_xticklabels(["real" if n == REAL else n for n in names], rotation=45,
                            ha="right")
         ax.grid(axis="y", alpha=0.3)
-    fig.suptitle(f"Free-root test: the balance controller performs each window "
+    performer = "the offline effort" if effort == "offline" else "the balance controller"
+    fig.suptitle(f"Free-root test: {performer} performs each window "
                  f"(L = {frames}; {CONTEXT_S:g} s context each side; grey: real windows)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
