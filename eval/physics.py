@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from controller.config import DEFAULT, ControllerConfig
+from eval.physics_unit import EFFORTS, PHYSICS_METRICS, simulate_unit
 from eval.records import REAL, Records
 from eval.runs import Checkpoint, StudyIncomplete, run_checkpointed
 
@@ -42,67 +43,6 @@ CONTEXT_S = 0.5
 CHECKPOINT_NAME = "physics-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/physics-checkpoint"
 CHECKPOINT_VERSION = 2
-#: The free-root body's efforts (:data:`controller.analysis.EFFORTS`): the real-time
-#: balance controller, or the offline effort's sampling search.
-EFFORTS = ("realtime", "offline")
-
-
-@dataclass(frozen=True)
-class PhysicsMetric:
-    """One figure of the free-root test.
-
-    Attributes
-    ----------
-    name, unit, label : str
-    better : str
-        ``"lower"`` (every figure here: fewer falls, smaller errors).
-    description : str
-    """
-
-    name: str
-    unit: str
-    label: str
-    description: str
-    better: str = "lower"
-
-
-_METRICS = (
-    PhysicsMetric("fell", "share", "falls %",
-                  "1 if the character fell during the run (before, in or after the window)"),
-    PhysicsMetric("ends_in_trouble", "share", "ends going down %",
-                  "1 if the character did not fall but was in trouble at the run's last "
-                  "frame (controller.balance.search.trouble_rule: pelvis or head well below the "
-                  "motion's, or the pelvis tilted well beyond the motion's): going down where the "
-                  "run ends"),
-    PhysicsMetric("fell_or_going_down", "share", "falls or going down %",
-                  "1 if the character fell or ended going down: the run did not end with "
-                  "the character up and out of trouble"),
-    PhysicsMetric("fall_after_window_start_s", "s", "fall time s",
-                  "when it fell, seconds after the window's first frame (negative: "
-                  "before the window); NaN if it did not"),
-    PhysicsMetric("joint_error_deg_rms", "deg", "joint error °",
-                  "RMS over the window's frames before any fall of the hinges' error"),
-    PhysicsMetric("body_error_mm_mean", "mm", "body error mm",
-                  "mean joint-centre position error relative to the pelvis, heading "
-                  "removed (controller.balance.follow)"),
-    PhysicsMetric("body_error_mm_peak", "mm", "body error peak mm",
-                  "peak of the same over the window"),
-    PhysicsMetric("root_drift_m", "m", "root drift m",
-                  "largest horizontal pelvis distance from the motion's, since the run's start"),
-    PhysicsMetric("heading_error_deg_peak", "deg", "heading error peak °",
-                  "largest difference of the pelvis's heading from the motion's over the "
-                  "window's frames before any fall (the turn the drift comes from)"),
-    PhysicsMetric("torque_saturation_share", "share", "torque saturated %",
-                  "share of joint x frame samples where the controller asked for more "
-                  "than the joint's strength"),
-    PhysicsMetric("contact_force_peak_bw", "bw", "floor force peak bw",
-                  "peak total normal floor force, body weights"),
-)
-#: The free-root figures, by name: the one registry every writer reads.
-PHYSICS_METRICS = {m.name: m for m in _METRICS}
-#: Shares shown as percentages in the tables.
-PERCENT = frozenset({"fell", "ends_in_trouble", "fell_or_going_down",
-                     "torque_saturation_share"})
 
 
 @dataclass(frozen=True)
@@ -173,52 +113,6 @@ def unit_motion(data, unit: Unit, pairs: dict, real_windows: dict):
     c = context_frames(motion.fps)
     lo, hi = max(0, window.start - c), min(motion.n_frames, window.stop + c)
     return data.model(clip), motion.frames(lo, hi), window.start - lo, window.stop - lo
-
-
-def simulate_unit(model, motion, start: int, stop: int,
-                  config: ControllerConfig = DEFAULT,
-                  effort: str = "realtime") -> dict[str, float]:
-    """Run the free-root body over ``motion`` with ``config`` and the figures of its
-    window: the real-time balance controller (``effort="realtime"``) or the offline
-    effort's sampling search (``"offline"``, :func:`controller.offline.perform`)."""
-    from controller import to_qpos
-
-    qpos = to_qpos(model, motion)
-    if effort == "offline":
-        from controller.offline import perform
-        from controller.offline.window import window_figures
-
-        result = perform(model, qpos, motion.fps, config)
-        summary = window_figures(model, result, qpos, start, stop, config)
-        fall_frame = result.tracking.fall_frame
-        n_frames = result.tracking.n_frames
-
-        def whole_run():
-            return window_figures(model, result, qpos, 0, n_frames, config)
-    elif effort == "realtime":
-        from controller.balance.follow import follow
-        from controller.balance.run import window_summary
-
-        run = follow(model, qpos, motion.fps, config=config)
-        summary = window_summary(run, start, stop)
-        fall_frame, n_frames = run.fall_frame, run.n_frames
-
-        def whole_run():
-            return window_summary(run, 0, n_frames)
-    else:
-        raise ValueError(f"unknown effort {effort!r} (efforts: {', '.join(EFFORTS)})")
-    fell = fall_frame is not None
-    going_down = 0.0 if fell else whole_run()["ends_in_trouble"]
-    return {
-        "fell": 1.0 if fell else 0.0,
-        "ends_in_trouble": going_down,
-        "fell_or_going_down": 1.0 if fell or going_down == 1.0 else 0.0,
-        "fall_after_window_start_s": ((fall_frame - start) / motion.fps if fell
-                                      else math.nan),
-        **{name: summary[name] for name in PHYSICS_METRICS
-           if name not in ("fell", "ends_in_trouble", "fell_or_going_down",
-                           "fall_after_window_start_s")},
-    }
 
 
 # --- in the workers -------------------------------------------------------------------------

@@ -6,7 +6,8 @@ from __future__ import annotations
 import os
 from typing import TYPE_CHECKING
 
-from eval.physics import CONTEXT_S, PERCENT, PHYSICS_METRICS
+from eval.physics import CONTEXT_S
+from eval.physics_unit import PERCENT, PHYSICS_METRICS
 from eval.records import REAL
 from upm.transitions.registry import get_method
 

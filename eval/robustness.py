@@ -13,13 +13,11 @@ same on any machine). The wall time per simulated second is recorded per run, bu
 runs share the machine (``workers`` at once, each on one process): ``upm simulate`` and
 ``upm bench`` measure the cost alone.
 
-The same rows can be performed in the offline effort too (``efforts``): the sampling
-search over the servos' targets (:func:`controller.offline.perform`), which asks whether
-the body can perform the row at all, each run on ``offline.threads`` threads (its workers:
-the cores divided by them), on the exact reference and ``offline_seeds`` offset ones; its
-figures are the same by name, its search's work in rollouts and backtracks. ``max_s``
-keeps each row's first seconds, for both efforts alike (the offline effort costs tens of
-wall s per simulated s).
+The rows can be performed in the offline effort too (``efforts``: the sampling search of
+:func:`controller.offline.perform`, each run on ``offline.threads`` threads), on the exact
+reference and ``offline_seeds`` offset ones, with the same figures by name; ``max_s``
+keeps each row's first seconds in both efforts (the offline effort costs tens of wall s
+per simulated s).
 
 A unit of work is one (row, seed, effort) (:class:`Unit`), run in a worker of
 :mod:`eval.executor` (a local pool or Ray) on one process of the controller (the same run
@@ -291,7 +289,6 @@ def run_unit(settings: Settings, unit: Unit) -> dict:
     qpos = to_qpos(model, motion)
     if unit.effort == "offline":
         from eval.robustness_offline import offline_figures
-
         out = offline_figures(model, qpos, motion.fps, config, RUN_FIELDS)
     else:
         tracking = free_run(model, qpos, motion.fps, processes=1, config=config)

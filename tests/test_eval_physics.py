@@ -154,7 +154,8 @@ def test_the_offline_effort_performs_a_real_window_with_the_same_figures(study):
     within a few degrees."""
     from controller.config import DEFAULT
     from eval.pairs import draw_real_windows
-    from eval.physics import Unit, context_frames, simulate_unit, unit_motion
+    from eval.physics import Unit, context_frames, unit_motion
+    from eval.physics_unit import simulate_unit
 
     real = {20: draw_real_windows(study.data.lengths, PAIRS, 20, study.config.seed,
                                   context=context_frames(120.0))}
