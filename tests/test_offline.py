@@ -20,8 +20,9 @@ from upm.cli import main
 
 pytestmark = pytest.mark.physics  # free-root runs
 
-#: A small search: a test's run takes seconds, not minutes.
-SMALL = DEFAULT.updated({"offline": {"samples": 32, "keep": 4}})
+#: A small search from the reference's targets (the warm start has its own tests,
+#: test_offline_warm.py): a test's run takes seconds, not minutes.
+SMALL = DEFAULT.updated({"offline": {"samples": 32, "keep": 4, "warm_start": False}})
 
 
 @pytest.fixture(scope="module")

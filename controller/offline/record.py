@@ -126,7 +126,13 @@ def perform(model, qpos_ref, fps: float, config: ControllerConfig = DEFAULT,
 
     clock = time.perf_counter()
     plan = plan_tracking(model, np.asarray(qpos_ref, dtype=float), fps, "free", True, config)
-    outcome = search(model, plan, config, progress)
+    warmed = False
+    if config.offline.warm_start:
+        from controller.offline.warm import warm_plan
+
+        warm = warm_plan(model, plan, config)
+        plan, warmed = warm.plan, warm.used_frames > 0
+    outcome = search(model, plan, config, progress, keep_plan_path=warmed)
     run = track_plan(model, replace(plan, ctrl=outcome.ctrl), config)
     wall = time.perf_counter() - clock
     _, body, drift, heading, _ = reference_errors(plan.model, run.qpos, plan.reference_qpos)

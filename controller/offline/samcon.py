@@ -10,8 +10,13 @@ decays the parent's correction), spread evenly over the ``keep`` best states the
 holds at the segment's start, rolled out in MuJoCo (``mujoco.rollout`` on
 ``offline.threads`` threads: the results do not depend on it) and scored by
 :func:`controller.offline.cost.state_cost` over the segment's frames (plus
-``fall_cost`` for a fall, :mod:`controller.falls`); the ``keep`` best are kept. Where every
-sample is in trouble (cost above ``trouble_cost`` or fallen), the search goes back 1, then
+``fall_cost`` for a fall, :mod:`controller.falls`); the ``lookahead_top`` cheapest are
+rolled on ``lookahead_s`` past the segment and charged their tail's cost (a state already
+tipping over is not kept for a segment close to the reference), and the ``keep`` best are
+kept. The plan's own path (no correction: with the warm start, the real-time
+controller's run, :mod:`controller.offline.warm`) can be kept whatever it ranks, while it
+has not fallen. Where every sample is in trouble (cost above ``trouble_cost``, fallen,
+or fallen in its tail), the search goes back 1, then
 2, ... up to ``backtracks`` segments and samples again, within ``budget`` (see
 :class:`controller.config.OfflineConfig`). Where every kept state has fallen, the search
 stops and the rest runs on the servos alone. Deterministic for a seed.
@@ -37,6 +42,7 @@ class _Node:
     ctrl: np.ndarray  # (steps, nu) the segment's servo targets
     cost: float
     fell: bool
+    on_plan: bool = False  # every correction so far zero: the plan's own path
 
 
 @dataclass(frozen=True)
@@ -52,7 +58,8 @@ class SearchOutcome:
     steps : int
         Physics steps simulated in all.
     passes : float
-        Steps simulated over ``samples`` times the motion's steps (at most the budget).
+        Steps simulated over one pass: ``samples`` times the motion's steps, plus every
+        segment's lookahead tails (at most the budget).
     backtracks : int
         Times the search went back.
     segments : int
@@ -80,8 +87,8 @@ def segment_bounds(n_frames: int, fps: float, segment_s: float) -> list[int]:
     return bounds
 
 
-def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = False
-           ) -> SearchOutcome:
+def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = False,
+           keep_plan_path: bool = False) -> SearchOutcome:
     """The search over the servo targets of a free-root tracking plan.
 
     Parameters
@@ -94,6 +101,10 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
         Its ``offline`` section and ``falls``.
     progress : bool
         A progress bar (segments) on a terminal.
+    keep_plan_path : bool
+        Keep the plan's own path (no correction) among the kept states while it has not
+        fallen, however it ranks (the warm start's: the real-time controller's run,
+        :mod:`controller.offline.warm`), so that the search can always fall back on it.
     """
     from controller.body import body_figures
     from controller.offline.cost import FeatureMaker
@@ -112,10 +123,14 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
     sigma = math.radians(off.sigma_deg)
     fresh = math.sqrt(max(0.0, 1.0 - off.coherence ** 2))
     nu = sim.nu
-    limit_steps = off.budget * off.samples * plan.steps
+    # a pass: every segment's samples, and its lookahead's tails
+    tail_steps = (off.lookahead_top * max(1, round(off.lookahead_s * plan.fps)) * substeps
+                  if off.lookahead_s > 0 else 0)
+    one_pass = off.samples * plan.steps + n_seg * tail_steps
+    limit_steps = off.budget * one_pass
     with Roller(sim, off.threads) as roller:
         start = _Node(None, roller.state_of(plan.start_qpos, plan.start_qvel),
-                      np.zeros(nu), np.empty((0, nu)), 0.0, False)
+                      np.zeros(nu), np.empty((0, nu)), 0.0, False, True)
         kept: list[list[_Node]] = [[start]] + [[] for _ in range(n_seg)]
         fails = [0] * n_seg
         rollouts = steps = backtracks = 0
@@ -140,19 +155,33 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
             at = (frames - bounds[j]) * substeps - 1  # the step that ends each frame
             cost, fell = _score(roller.qpos(states[:, at]), roller.qvel(states[:, at]),
                                 frames, ref, features, figures, config)
-            order = np.lexsort((np.arange(off.samples), cost))[:off.keep]
             trouble = (cost > off.trouble_cost) | fell
+            ahead = np.zeros(off.samples)
+            if off.lookahead_s > 0:
+                ahead, tail_fell, tail_steps = _lookahead(
+                    roller, plan, states[:, -1], delta, cost, bounds[j + 1],
+                    lambda q, v, f: _score(q, v, f, ref, features, figures, config), off)
+                steps += tail_steps
+                trouble |= tail_fell | ~np.isfinite(ahead)
+            order = np.lexsort((np.arange(off.samples), cost, cost + ahead))[:off.keep]
+            on_plan = [i for i in range(len(parents)) if parents[i].on_plan]
+            if keep_plan_path and on_plan and not fell[on_plan[0]] \
+                    and on_plan[0] not in order:
+                order = np.append(order[:off.keep - 1], on_plan[0])
             if trouble.all() and fails[j] < off.backtracks:
                 back = min(fails[j] + 1, j)
                 again = (b - bounds[j - back] * substeps) + (plan.steps - b)
-                if steps + off.samples * again <= limit_steps:
+                redo = back + 1 + (n_seg - j - 1)  # segments again and still ahead
+                if steps + off.samples * again + tail_steps * redo <= limit_steps:
                     fails[j] += 1
                     backtracks += 1
                     bar.update(-back)
                     j -= back
                     continue
             kept[j + 1] = [_Node(parents[owner[i]], states[i, -1].copy(), delta[i],
-                                 ctrl[i], float(cost[i]), bool(fell[i])) for i in order]
+                                 ctrl[i], float(cost[i]), bool(fell[i]),
+                                 i < len(parents) and parents[owner[i]].on_plan)
+                           for i in order]
             bar.update(1)
             j += 1
             if all(node.fell for node in kept[j]):
@@ -170,10 +199,41 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
     for k, node in enumerate(path):
         chosen[bounds[k] * substeps:bounds[k + 1] * substeps] = node.ctrl
         seg_cost[k] = node.cost
-    total = plan.ctrl.shape[0] * off.samples
+    total = one_pass
     return SearchOutcome(ctrl=chosen, rollouts=rollouts, steps=steps,
                          passes=steps / total if total else 0.0, backtracks=backtracks,
                          segments=n_seg, searched_segments=searched, segment_cost=seg_cost)
+
+
+def _lookahead(roller, plan, end_states, delta, cost, end_frame, score, off):
+    """The cost the lookahead adds to each sample, shape (N,): the
+    ``off.lookahead_top`` samples cheapest over their segment are rolled on for
+    ``off.lookahead_s`` from their ``end_states`` (N, nstate) at frame ``end_frame`` with
+    their correction ``delta`` (N, nu) held (past the motion's end, its last targets and
+    its last frame as the reference), and get ``lookahead_weight`` times the tail's mean
+    cost plus ``fall_cost`` where the tail fell; the others get infinity (never kept
+    before one that was looked ahead). Also whether each tail fell (N,; the others:
+    True) and the physics steps simulated."""
+    n = cost.shape[0]
+    substeps, n_frames = plan.substeps, plan.reference_qpos.shape[0]
+    tail = max(1, round(off.lookahead_s * plan.fps))
+    top = np.lexsort((np.arange(n), cost))[:off.lookahead_top]
+    top = top[np.isfinite(cost[top])]
+    ahead = np.full(n, np.inf)
+    fell = np.ones(n, dtype=bool)
+    if top.size == 0:
+        return ahead, fell, 0
+    rows = np.arange(end_frame * substeps, (end_frame + tail) * substeps)
+    rows = np.minimum(rows, plan.ctrl.shape[0] - 1)
+    ctrl = plan.ctrl[None, rows] + delta[top][:, None]
+    states = roller.run(end_states[top], ctrl)
+    at = np.arange(1, tail + 1) * substeps - 1
+    frames = np.minimum(end_frame + np.arange(1, tail + 1), n_frames - 1)
+    total, tail_fell = score(roller.qpos(states[:, at]), roller.qvel(states[:, at]), frames)
+    mean = total - off.fall_cost * tail_fell
+    ahead[top] = off.lookahead_weight * mean + off.fall_cost * tail_fell
+    fell[top] = tail_fell
+    return ahead, fell, top.size * rows.size
 
 
 def _score(qpos, qvel, frames, ref, features, figures, config):
