@@ -187,13 +187,19 @@ class BalanceRun:
                 if self.steps and self.raw_step_s > 0 else math.nan)
 
 
-def replay(model, run: BalanceRun) -> np.ndarray:
+def replay(model, run: BalanceRun, every_step: bool = False) -> np.ndarray:
     """Run a :class:`BalanceRun`'s recorded torques open-loop from its start.
+
+    Parameters
+    ----------
+    every_step : bool
+        Return the state at the start of every physics step instead of every frame.
 
     Returns
     -------
-    ndarray, shape (T, nq)
-        The state at every frame (NaN where the run had stopped).
+    ndarray, shape (T, nq), or (S, nq) with ``every_step``
+        The state at every frame (NaN where the run had stopped), or at the start of each
+        of the run's ``S`` physics steps.
     """
     import mujoco
 
@@ -203,15 +209,18 @@ def replay(model, run: BalanceRun) -> np.ndarray:
     data.qpos[:] = run.start_qpos
     data.qvel[:] = run.start_qvel
     mujoco.mj_forward(sim, data)
-    out = np.full_like(run.qpos, np.nan)
-    out[0] = data.qpos
+    frames = np.full_like(run.qpos, np.nan)
+    frames[0] = data.qpos
+    steps = np.empty((run.steps, sim.nq)) if every_step else None
     for k in range(run.steps):
+        if steps is not None:
+            steps[k] = data.qpos
         mujoco.mj_step1(sim, data)
         data.ctrl[:] = run.ctrl[k]
         mujoco.mj_step2(sim, data)
         if (k + 1) % run.substeps == 0:
-            out[(k + 1) // run.substeps] = data.qpos
-    return out
+            frames[(k + 1) // run.substeps] = data.qpos
+    return steps if every_step else frames
 
 
 def finite_stat(values, how) -> float:

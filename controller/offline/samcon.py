@@ -162,7 +162,7 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
                     roller, plan, states[:, -1], delta, cost, bounds[j + 1],
                     lambda q, v, f: _score(q, v, f, ref, features, figures, config), off)
                 steps += tail_steps
-                trouble |= tail_fell | ~np.isfinite(ahead)
+                trouble |= tail_fell
             order = np.lexsort((np.arange(off.samples), cost, cost + ahead))[:off.keep]
             on_plan = [i for i in range(len(parents)) if parents[i].on_plan]
             if keep_plan_path and on_plan and not fell[on_plan[0]] \
@@ -199,9 +199,8 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
     for k, node in enumerate(path):
         chosen[bounds[k] * substeps:bounds[k + 1] * substeps] = node.ctrl
         seg_cost[k] = node.cost
-    total = one_pass
     return SearchOutcome(ctrl=chosen, rollouts=rollouts, steps=steps,
-                         passes=steps / total if total else 0.0, backtracks=backtracks,
+                         passes=steps / one_pass if one_pass else 0.0, backtracks=backtracks,
                          segments=n_seg, searched_segments=searched, segment_cost=seg_cost)
 
 

@@ -47,14 +47,11 @@ class WarmStart:
     used_frames : int
         Frames (from the start) whose targets are the real-time run's (0 where it fell).
     realtime_fell : bool
-    realtime_wall_s : float
-        Wall seconds of the real-time run and its replay.
     """
 
     plan: object
     used_frames: int
     realtime_fell: bool
-    realtime_wall_s: float
 
 
 def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
@@ -73,15 +70,12 @@ def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
     -------
     WarmStart
     """
-    import time
-
     from controller.balance.follow import follow
+    from controller.balance.run import replay
 
-    clock = time.perf_counter()
     run = follow(model, plan.reference_qpos, plan.fps, config=config)
     if run.fell or run.diverged_frame is not None:
-        return WarmStart(plan=plan, used_frames=0, realtime_fell=True,
-                         realtime_wall_s=time.perf_counter() - clock)
+        return WarmStart(plan=plan, used_frames=0, realtime_fell=True)
     if abs(run.timestep_s - float(plan.model.opt.timestep)) > 1e-12 \
             or run.substeps != plan.substeps:
         raise ValueError("the real-time run's physics step is not the plan's")
@@ -92,34 +86,10 @@ def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
     sim.actuator_biasprm[:, 2] = 0.0  # no damping: the real-time torques hold it
     sim.actuator_ctrllimited[:] = 0
     joints = sim.actuator_trnid[:, 0]
-    angles = _step_angles(model, run)[:, sim.jnt_qposadr[joints]]  # (S, nu)
+    angles = replay(model, run, every_step=True)[:, sim.jnt_qposadr[joints]]  # (S, nu)
     ctrl = plan.ctrl.copy()
     steps = min(ctrl.shape[0], run.ctrl.shape[0])
     ctrl[:steps] = angles[:steps] + run.ctrl[:steps] / kp
     warm = replace(plan, model=sim, ctrl=ctrl, start_qpos=run.start_qpos.copy(),
                    start_qvel=run.start_qvel.copy())
-    return WarmStart(plan=warm, used_frames=steps // plan.substeps + 1, realtime_fell=False,
-                     realtime_wall_s=time.perf_counter() - clock)
-
-
-def _step_angles(model, run) -> np.ndarray:
-    """The real-time run's ``qpos`` at the start of every physics step, shape (S, nq): its
-    torques replayed open-loop from its start (the run's own path, as
-    :func:`controller.balance.run.replay`)."""
-    import mujoco
-
-    from controller.balance.control import torque_model
-
-    sim = torque_model(model)
-    sim.opt.timestep = run.timestep_s
-    data = mujoco.MjData(sim)
-    data.qpos[:] = run.start_qpos
-    data.qvel[:] = run.start_qvel
-    mujoco.mj_forward(sim, data)
-    q = np.empty((run.ctrl.shape[0], sim.nq))
-    for k in range(run.ctrl.shape[0]):
-        q[k] = data.qpos
-        mujoco.mj_step1(sim, data)
-        data.ctrl[:] = run.ctrl[k]
-        mujoco.mj_step2(sim, data)
-    return q
+    return WarmStart(plan=warm, used_frames=steps // plan.substeps + 1, realtime_fell=False)
