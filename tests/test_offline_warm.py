@@ -12,7 +12,7 @@ from controller.balance.follow import follow
 from controller.config import DEFAULT
 from controller.offline import perform
 from controller.offline.rollouts import Roller
-from controller.offline.samcon import _lookahead, _score
+from controller.offline.samcon import _lookahead, _score, rank
 from controller.offline.warm import warm_plan
 from controller.tracking.plan import plan_tracking
 from controller.tracking.servo import track_plan
@@ -81,10 +81,39 @@ def test_the_lookahead_charges_a_state_that_is_tipping_over(model02, walk):
         states = np.stack([roller.state_of(plan.start_qpos, plan.start_qvel),
                            roller.state_of(tipped, plan.start_qvel),
                            roller.state_of(plan.start_qpos, plan.start_qvel)])
-        ahead, fell, steps = _lookahead(
+        ahead, fell, down, steps = _lookahead(
             roller, plan, states, np.zeros((3, plan.model.nu)), np.array([0.0, 0.1, 0.2]),
             0, lambda q, v, f: _score(q, v, f, ref, features, figures, config), off)
     assert list(fell) == [False, True, True]  # the third is not looked ahead: not judged
+    assert list(down) == [False, True, True]
     assert 0.0 <= ahead[0] < off.trouble_cost
     assert ahead[1] >= off.fall_cost and ahead[2] == np.inf
     assert steps == 2 * round(0.6 * walk.fps) * plan.substeps
+
+
+def test_the_segment_score_says_which_states_end_in_trouble(model02, walk):
+    """A state at the reference is out of trouble; one with the pelvis 20 cm under the
+    reference's (the search's trouble test: 12 cm), or tilted 60 deg, is in it."""
+    from controller.body import body_figures
+    from controller.offline.cost import FeatureMaker
+
+    plan = plan_tracking(model02, to_qpos(model02, walk)[:30], walk.fps, "free", True,
+                         DEFAULT)
+    features = FeatureMaker(plan.model)
+    ref = features.reference(plan.reference_qpos, plan.fps)
+    qpos = np.repeat(plan.reference_qpos[None, :3], 3, axis=0)  # (3 states, 3 frames, nq)
+    qpos[1, :, 2] -= 0.20
+    qpos[2, :, 3:7] = [np.cos(np.radians(30)), np.sin(np.radians(30)), 0.0, 0.0]
+    qvel = np.zeros((3, 3, plan.model.nv))
+    _, fell, down = _score(qpos, qvel, np.arange(3), ref, features, body_figures(model02),
+                           DEFAULT)
+    assert list(down) == [False, True, True]
+    assert not fell[0]
+
+
+def test_the_ranking_keeps_upright_states_before_cheaper_ones_going_down():
+    cost = np.array([0.5, 0.1, 0.3, 0.2])
+    ahead = np.array([0.0, 0.0, 0.0, np.inf])
+    down = np.array([False, True, False, False])
+    assert list(rank(cost, ahead, down)) == [2, 0, 3, 1]
+    assert list(rank(cost, ahead, down, upright_first=False)) == [1, 2, 0, 3]

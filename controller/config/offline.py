@@ -78,6 +78,15 @@ class OfflineConfig:
     lookahead_top: int = 24
     #: The weight of the tail's mean cost (its fall, ``fall_cost``, added unweighted).
     lookahead_weight: float = 1.0
+    #: Rank the samples upright first: a sample whose segment ends in trouble by the
+    #: real-time search's test (the pelvis or the head too far below the reference's, or
+    #: the pelvis tilted; the ``search`` section's ``trouble_*``), or whose lookahead tail
+    #: does, or that was not looked ahead, is kept only after every sample that is out of
+    #: trouble, whatever their costs. The cost weighs the whole posture, so a state going
+    #: down can cost less than an upright one further from the reference's joint angles;
+    #: without it, the warm-started search left the real-time controller's upright run
+    #: for one that ended going down (3 of 10 real windows of the free-root study).
+    upright_first: bool = True
     #: The search simulates at most ``budget * samples`` times the motion's physics steps
     #: in all (and the lookahead's tails of each segment as many times): 1 is one pass of
     #: :attr:`samples` rollouts over every segment, with no room

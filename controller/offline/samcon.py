@@ -13,11 +13,12 @@ holds at the segment's start, rolled out in MuJoCo (``mujoco.rollout`` on
 ``fall_cost`` for a fall, :mod:`controller.falls`); the ``lookahead_top`` cheapest are
 rolled on ``lookahead_s`` past the segment and charged their tail's cost (a state already
 tipping over is not kept for a segment close to the reference), and the ``keep`` best are
-kept. The plan's own path (no correction: with the warm start, the real-time
-controller's run, :mod:`controller.offline.warm`) can be kept whatever it ranks, while it
-has not fallen. Where every sample is in trouble (cost above ``trouble_cost``, fallen,
-or fallen in its tail), the search goes back 1, then
-2, ... up to ``backtracks`` segments and samples again, within ``budget`` (see
+kept, those out of trouble at the segment's end and their tail's end first
+(``upright_first``, :func:`rank`). The plan's own path (no correction: with the warm
+start, the real-time controller's run, :mod:`controller.offline.warm`) can be kept
+whatever it ranks, while it has not fallen. Where every sample is in trouble (cost above
+``trouble_cost``, fallen, or fallen in its tail), the search goes back 1, then 2, ... up
+to ``backtracks`` segments and samples again, within ``budget`` (see
 :class:`controller.config.OfflineConfig`). Where every kept state has fallen, the search
 stops and the rest runs on the servos alone. Deterministic for a seed.
 """
@@ -153,17 +154,18 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
             steps += off.samples * (b - a)
             frames = np.arange(bounds[j] + 1, bounds[j + 1] + 1)
             at = (frames - bounds[j]) * substeps - 1  # the step that ends each frame
-            cost, fell = _score(roller.qpos(states[:, at]), roller.qvel(states[:, at]),
-                                frames, ref, features, figures, config)
+            cost, fell, down = _score(roller.qpos(states[:, at]), roller.qvel(states[:, at]),
+                                      frames, ref, features, figures, config)
             trouble = (cost > off.trouble_cost) | fell
             ahead = np.zeros(off.samples)
             if off.lookahead_s > 0:
-                ahead, tail_fell, tail_steps = _lookahead(
+                ahead, tail_fell, tail_down, tail_steps = _lookahead(
                     roller, plan, states[:, -1], delta, cost, bounds[j + 1],
                     lambda q, v, f: _score(q, v, f, ref, features, figures, config), off)
                 steps += tail_steps
                 trouble |= tail_fell
-            order = np.lexsort((np.arange(off.samples), cost, cost + ahead))[:off.keep]
+                down |= tail_down
+            order = rank(cost, ahead, down, off.upright_first)[:off.keep]
             on_plan = [i for i in range(len(parents)) if parents[i].on_plan]
             if keep_plan_path and on_plan and not fell[on_plan[0]] \
                     and on_plan[0] not in order:
@@ -204,6 +206,27 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
                          segments=n_seg, searched_segments=searched, segment_cost=seg_cost)
 
 
+def rank(cost, ahead, down, upright_first: bool = True) -> np.ndarray:
+    """The samples best first: by segment cost plus lookahead ``cost + ahead``, then by
+    segment cost, then by index; with ``upright_first``, every sample out of trouble
+    (``down`` False) before every sample in it.
+
+    Parameters
+    ----------
+    cost, ahead : ndarray, shape (N,)
+    down : ndarray of bool, shape (N,)
+    upright_first : bool
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+    """
+    keys = (np.arange(cost.shape[0]), cost, cost + ahead)
+    if upright_first:
+        keys += (np.asarray(down, dtype=bool),)
+    return np.lexsort(keys)
+
+
 def _lookahead(roller, plan, end_states, delta, cost, end_frame, score, off):
     """The cost the lookahead adds to each sample, shape (N,): the
     ``off.lookahead_top`` samples cheapest over their segment are rolled on for
@@ -211,8 +234,8 @@ def _lookahead(roller, plan, end_states, delta, cost, end_frame, score, off):
     their correction ``delta`` (N, nu) held (past the motion's end, its last targets and
     its last frame as the reference), and get ``lookahead_weight`` times the tail's mean
     cost plus ``fall_cost`` where the tail fell; the others get infinity (never kept
-    before one that was looked ahead). Also whether each tail fell (N,; the others:
-    True) and the physics steps simulated."""
+    before one that was looked ahead). Also whether each tail fell and whether its last
+    frame is in trouble (N, each; the others: True), and the physics steps simulated."""
     n = cost.shape[0]
     substeps, n_frames = plan.substeps, plan.reference_qpos.shape[0]
     tail = max(1, round(off.lookahead_s * plan.fps))
@@ -220,25 +243,31 @@ def _lookahead(roller, plan, end_states, delta, cost, end_frame, score, off):
     top = top[np.isfinite(cost[top])]
     ahead = np.full(n, np.inf)
     fell = np.ones(n, dtype=bool)
+    down = np.ones(n, dtype=bool)
     if top.size == 0:
-        return ahead, fell, 0
+        return ahead, fell, down, 0
     rows = np.arange(end_frame * substeps, (end_frame + tail) * substeps)
     rows = np.minimum(rows, plan.ctrl.shape[0] - 1)
     ctrl = plan.ctrl[None, rows] + delta[top][:, None]
     states = roller.run(end_states[top], ctrl)
     at = np.arange(1, tail + 1) * substeps - 1
     frames = np.minimum(end_frame + np.arange(1, tail + 1), n_frames - 1)
-    total, tail_fell = score(roller.qpos(states[:, at]), roller.qvel(states[:, at]), frames)
+    total, tail_fell, tail_down = score(roller.qpos(states[:, at]), roller.qvel(states[:, at]),
+                                        frames)
     mean = total - off.fall_cost * tail_fell
     ahead[top] = off.lookahead_weight * mean + off.fall_cost * tail_fell
     fell[top] = tail_fell
-    return ahead, fell, top.size * rows.size
+    down[top] = tail_down
+    return ahead, fell, down, top.size * rows.size
 
 
 def _score(qpos, qvel, frames, ref, features, figures, config):
-    """Each sample's cost (mean over its frames, ``fall_cost`` added where it fell) and
-    whether it fell: ``qpos`` (N, F, nq), ``qvel`` (N, F, nv) at the reference's
-    ``frames`` (F,)."""
+    """Each sample's cost (mean over its frames, ``fall_cost`` added where it fell),
+    whether it fell, and whether its last frame is in trouble by the real-time search's
+    test (:func:`controller.balance.search.trouble_rule`; fallen or not finite count as
+    in trouble): ``qpos`` (N, F, nq), ``qvel`` (N, F, nv) at the reference's ``frames``
+    (F,); three arrays of shape (N,)."""
+    from controller.balance.search import tilt_limits, up_axis_z
     from controller.falls import fallen
     from controller.offline.cost import Features, state_cost
 
@@ -257,4 +286,10 @@ def _score(qpos, qvel, frames, ref, features, figures, config):
     fell = down.any(axis=1)
     total = cost.mean(axis=1) + config.offline.fall_cost * fell
     total[~finite.reshape(n, f).all(axis=1)] = np.inf
-    return total, fell
+    last = np.arange(n) * f + f - 1
+    settings = config.search
+    low = ref_at.root_height_m[last] - sim.root_height_m[last] > settings.trouble_drop_m
+    bent = ref_at.head_height_m[last] - sim.head_height_m[last] > settings.trouble_head_drop_m
+    tilted = up_axis_z(sim.root_quat[last]) < tilt_limits(up_axis_z(ref_at.root_quat[last]),
+                                                          settings)
+    return total, fell, low | bent | tilted | fell | ~finite.reshape(n, f).all(axis=1)
