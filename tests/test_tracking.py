@@ -191,3 +191,26 @@ def test_plan_steps_divide_the_frame_and_interpolate(model02, walk_segment):
     assert fine.substeps == 9 and fine.ctrl.shape == (9 * 9, model02.nu)
     with pytest.raises(ValueError, match="unknown tracking mode"):
         plan_tracking(model02, qpos, 120.0, "flying")
+
+
+@pytest.mark.parametrize("lift_m", [0.19, -0.03])
+def test_a_free_plan_starts_on_the_floor_with_its_reference_shifted_alike(
+        model02, walk_segment, lift_m):
+    """A window that begins in the air or on a box (lifted 19 cm), or sunk 3 cm: the free
+    plan's start has its lowest point just into the floor, and the reference is moved by
+    the same height, so that the falls and the offline search judge heights the body can
+    reach; the driven plan keeps the reference as it is."""
+    from controller.grounding import floor_clearance
+
+    qpos = to_qpos(model02, walk_segment.frames(0, 10))
+    qpos[:, 2] += lift_m
+    plan = plan_tracking(model02, qpos, 120.0, "free")
+    depth = -floor_clearance(plan.model, mujoco.MjData(plan.model), plan.start_qpos)
+    assert depth == pytest.approx(DEFAULT.reference.start_depth_m, abs=1e-6)
+    np.testing.assert_array_equal(plan.start_qpos, plan.reference_qpos[0])
+    shift = plan.reference_qpos[:, 2] - qpos[:, 2]
+    np.testing.assert_allclose(shift, shift[0], atol=1e-12)
+    assert -lift_m - 0.05 < shift[0] < -lift_m + 0.05
+    np.testing.assert_array_equal(plan.reference_qpos[:, 3:], qpos[:, 3:])
+    driven = plan_tracking(model02, qpos, 120.0, "driven")
+    np.testing.assert_array_equal(driven.reference_qpos[:, :3], qpos[:, :3])

@@ -36,7 +36,8 @@ class TrackingPlan:
     substeps : int
         Physics steps per frame.
     reference_qpos : ndarray, shape (T, nq)
-        The reference, hinges unwrapped.
+        The reference, hinges unwrapped; ``"free"``: shifted in height so that its first
+        frame's lowest point is ``reference.start_depth_m`` into the floor (the start).
     start_qpos, start_qvel : ndarray, shape (nq,), (nv,)
         The first state.
     ctrl : ndarray, shape ((T-1) * substeps, nu)
@@ -113,9 +114,17 @@ def plan_tracking(model, reference_qpos, fps: float, mode: str = "free",
     half_vel = half_step_velocities(sim, ref, fps)  # (T-1, nv)
     ctrl = _actuator_targets(sim, ref, substeps, servo_lead_s(sim) * fps * float(lead))
     driven = mode == "driven"
-    start = ref[0].copy()
     if not driven:
-        start[layout.free_qpos + 2] += floor_depth(sim, mujoco.MjData(sim), start)
+        # the first frame's lowest point on the floor (mocap feet hover or sink, a window
+        # may begin in the air or on a box), the whole reference shifted with it, so that
+        # the heights the falls and the search judge by are the ones the body can reach
+        from controller.grounding import floor_clearance
+
+        z = layout.free_qpos + 2
+        ref = ref.copy()
+        ref[:, z] -= floor_clearance(sim, mujoco.MjData(sim), ref[0]) \
+            + config.reference.start_depth_m
+    start = ref[0].copy()
     return TrackingPlan(
         model=sim, mode=mode, fps=float(fps), substeps=substeps, reference_qpos=ref,
         start_qpos=start, start_qvel=half_vel[0].copy(), ctrl=ctrl,
@@ -169,16 +178,3 @@ def _root_path(free_qpos, substeps: int) -> np.ndarray:
     quat = (1 - w) * a[:, 3:] + w * qb
     quat /= np.linalg.norm(quat, axis=1, keepdims=True)
     return np.concatenate([pos, quat], axis=1)
-
-
-def floor_depth(model, data, qpos) -> float:
-    """Deepest penetration of any geom into the floor in state ``qpos``, metres."""
-    from controller.checks.contacts import collide
-
-    collide(model, data, qpos)
-    n = data.ncon
-    if not n:
-        return 0.0
-    bodies = model.geom_bodyid[np.asarray(data.contact.geom[:n])]
-    floor = (bodies[:, 0] == 0) | (bodies[:, 1] == 0)
-    return max(0.0, float(-np.asarray(data.contact.dist[:n])[floor].min(initial=0.0)))

@@ -3,8 +3,9 @@
 Two modes:
 
 - ``"free"``: the root is free on the floor. The simulation starts from the first frame's
-  pose (raised by its floor penetration, if any, so that it does not start inside the
-  floor) and velocity (finite differences), and only the servos move the body: whether it
+  pose (the whole reference moved in height so that the first frame's lowest point is
+  just into the floor: mocap feet hover or sink, a window may begin in the air or on a
+  box) and velocity (finite differences), and only the servos move the body: whether it
   stays up is part of the answer.
 - ``"driven"``: the root is driven along the reference: before every physics step the
   free joint's position, orientation and velocity are set from the reference
@@ -43,14 +44,13 @@ from controller.qpos import wrap_rad
 from controller.tracking.plan import (
     MODES,
     TrackingPlan,
-    floor_depth,
     physics_substeps,
     plan_tracking,
     servo_lead_s,
 )
 from controller.tracking.result import Tracking
 
-__all__ = ["MODES", "Tracking", "TrackingPlan", "floor_depth", "physics_substeps",
+__all__ = ["MODES", "Tracking", "TrackingPlan", "physics_substeps",
            "plan_tracking", "servo_lead_s", "track", "track_plan", "track_qpos"]
 
 
