@@ -83,9 +83,9 @@ class OfflineConfig:
     #: the pelvis tilted; the ``search`` section's ``trouble_*``), or whose lookahead tail
     #: does, or that was not looked ahead, is kept only after every sample that is out of
     #: trouble, whatever their costs. The cost weighs the whole posture, so a state going
-    #: down can cost less than an upright one further from the reference's joint angles;
-    #: without it, the warm-started search left the real-time controller's upright run
-    #: for one that ended going down (3 of 10 real windows of the free-root study).
+    #: down can cost less than an upright one further from the reference's joint angles.
+    #: True: on the first 4 s of six train clips it changed errors by 0.1 deg at most, and
+    #: the jump 02_04, which fell at 1.90 s without it, stood (4.2 deg RMS).
     upright_first: bool = True
     #: The search simulates at most ``budget * samples`` times the motion's physics steps
     #: in all (and the lookahead's tails of each segment as many times): 1 is one pass of
