@@ -351,6 +351,33 @@ def tilt_limits(ref_up_z, search=DEFAULT.search) -> np.ndarray:
     return np.minimum(search.trouble_up, beyond)
 
 
+def in_trouble(pelvis_m, head_m, pelvis_quat, ref_pelvis_m, ref_head_m, ref_pelvis_quat,
+               search=DEFAULT.search) -> np.ndarray:
+    """The search's test for trouble (:func:`trouble_rule`, as :meth:`Search.causes`) on
+    many states at once.
+
+    Parameters
+    ----------
+    pelvis_m, head_m : array_like, shape (N,)
+        The pelvis's and the head's heights.
+    pelvis_quat : array_like, shape (N, 4)
+        The pelvis's orientation (w, x, y, z).
+    ref_pelvis_m, ref_head_m, ref_pelvis_quat : array_like, shapes (N,), (N,), (N, 4)
+        The reference's, at the same frames.
+    search : controller.config.sections.SearchConfig
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        False where a height is NaN and the pelvis upright.
+    """
+    with np.errstate(invalid="ignore"):
+        low = np.asarray(ref_pelvis_m) - np.asarray(pelvis_m) > search.trouble_drop_m
+        bent = np.asarray(ref_head_m) - np.asarray(head_m) > search.trouble_head_drop_m
+    tilted = up_axis_z(pelvis_quat) < tilt_limits(up_axis_z(ref_pelvis_quat), search)
+    return low | bent | tilted
+
+
 def trouble_rule(search=DEFAULT.search) -> str:
     """The search's test for trouble (:meth:`Search.troubled`) in words (``search``:
     :class:`controller.config.sections.SearchConfig`)."""

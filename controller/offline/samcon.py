@@ -267,7 +267,7 @@ def _score(qpos, qvel, frames, ref, features, figures, config):
     test (:func:`controller.balance.search.trouble_rule`; fallen or not finite count as
     in trouble): ``qpos`` (N, F, nq), ``qvel`` (N, F, nv) at the reference's ``frames``
     (F,); three arrays of shape (N,)."""
-    from controller.balance.search import tilt_limits, up_axis_z
+    from controller.balance.search import in_trouble
     from controller.falls import fallen
     from controller.offline.cost import Features, state_cost
 
@@ -287,9 +287,7 @@ def _score(qpos, qvel, frames, ref, features, figures, config):
     total = cost.mean(axis=1) + config.offline.fall_cost * fell
     total[~finite.reshape(n, f).all(axis=1)] = np.inf
     last = np.arange(n) * f + f - 1
-    settings = config.search
-    low = ref_at.root_height_m[last] - sim.root_height_m[last] > settings.trouble_drop_m
-    bent = ref_at.head_height_m[last] - sim.head_height_m[last] > settings.trouble_head_drop_m
-    tilted = up_axis_z(sim.root_quat[last]) < tilt_limits(up_axis_z(ref_at.root_quat[last]),
-                                                          settings)
-    return total, fell, low | bent | tilted | fell | ~finite.reshape(n, f).all(axis=1)
+    down = in_trouble(sim.root_height_m[last], sim.head_height_m[last], sim.root_quat[last],
+                      ref_at.root_height_m[last], ref_at.head_height_m[last],
+                      ref_at.root_quat[last], config.search)
+    return total, fell, down | fell | ~finite.reshape(n, f).all(axis=1)

@@ -33,19 +33,17 @@ def trouble_frames(model, result, reference_qpos,
     ndarray of bool, shape (T,)
         False where the run has no state (after a divergence).
     """
-    from controller.balance.search import tilt_limits, up_axis_z
+    from controller.balance.search import in_trouble
     from controller.qpos import joint_layout
 
     run = result.tracking
     quat = slice(joint_layout(model).free_qpos + 3, joint_layout(model).free_qpos + 7)
-    settings = config.search
     ref = np.asarray(reference_qpos, dtype=float)
-    up = up_axis_z(np.nan_to_num(result.qpos[:, quat], nan=1.0))
-    with np.errstate(invalid="ignore"):
-        low = run.reference_pelvis_height_m - run.pelvis_height_m > settings.trouble_drop_m
-        bent = run.reference_head_height_m - run.head_height_m > settings.trouble_head_drop_m
-    tilted = up < tilt_limits(up_axis_z(ref[:, quat]), settings)
-    return (low | bent | tilted) & np.isfinite(result.qpos[:, 0])
+    trouble = in_trouble(run.pelvis_height_m, run.head_height_m,
+                         np.nan_to_num(result.qpos[:, quat], nan=1.0),
+                         run.reference_pelvis_height_m, run.reference_head_height_m,
+                         ref[:, quat], config.search)
+    return trouble & np.isfinite(result.qpos[:, 0])
 
 
 def _stat(values, how) -> float:
