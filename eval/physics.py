@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 CONTEXT_S = 0.5
 CHECKPOINT_NAME = "physics-partial.jsonl"
 CHECKPOINT_FORMAT = "upm-controller/physics-checkpoint"
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3
 
 
 @dataclass(frozen=True)

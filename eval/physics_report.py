@@ -47,15 +47,29 @@ def label(metric: str) -> str:
     return PHYSICS_METRICS[metric].label
 
 
-def method_rows(statistics: Summaries, frames: int, methods, group: str = "all") -> list[list[str]]:
-    """Per method (then the real windows): the :data:`TABLE_METRICS` cells."""
+#: The columns of the offline effort's table beside the real-time controller's: each
+#: offline figure followed by the real-time controller's on the same runs.
+BESIDE_METRICS = ("fell", "realtime_fell", "fell_or_going_down", "realtime_fell_or_going_down",
+                  "joint_error_deg_rms", "realtime_joint_error_deg_rms")
+
+
+def method_rows(statistics: Summaries, frames: int, methods, group: str = "all",
+                metrics=TABLE_METRICS) -> list[list[str]]:
+    """Per method (then the real windows): the cells of ``metrics``."""
     rows = []
     for name in [*methods, REAL]:
         shown = "real windows (calibration)" if name == REAL else name
         n = statistics.interval(frames, name, "fell", group)["n"]
         rows.append([f"{shown} (n={n})"] + [cell(m, statistics.interval(frames, name, m, group))
-                                            for m in TABLE_METRICS])
+                                            for m in metrics])
     return rows
+
+
+def beside_label(metric: str) -> str:
+    """A column of :data:`BESIDE_METRICS`: which effort, then the figure."""
+    if metric.startswith("realtime_"):
+        return label(metric)
+    return "offline: " + label(metric)
 
 
 def _table(header, rows) -> str:
@@ -111,13 +125,23 @@ def physics_markdown(statistics: Summaries, methods, windows, n_pairs: int,
             parts += ["", f"Paired over pairs ({reference} wins/ties/losses; lower is better "
                           f"for every column):", "",
                       _table(["comparison"] + [label(m) for m in TABLE_METRICS], rows)]
+        if effort == "offline":
+            parts += ["", "The real-time controller beside it, on the same runs (the offline "
+                          "search starts from the real-time controller's run of each motion: "
+                          "its warm start):", "",
+                      _table(["method"] + [beside_label(m) for m in BESIDE_METRICS],
+                             method_rows(statistics, frames, methods, metrics=BESIDE_METRICS))]
     return "\n".join(parts) + "\n"
 
 
-def physics_text(statistics: Summaries, frames: int, methods) -> str:
-    """The free-root headline for the terminal."""
-    header = ["method"] + [label(m) for m in TABLE_METRICS]
-    cells = method_rows(statistics, frames, methods)
+def physics_text(statistics: Summaries, frames: int, methods,
+                 effort: str = "realtime") -> str:
+    """The free-root headline for the terminal (the offline effort: beside the real-time
+    controller's figures on the same runs, :data:`BESIDE_METRICS`)."""
+    metrics = BESIDE_METRICS if effort == "offline" else TABLE_METRICS
+    header = ["method"] + [beside_label(m) if effort == "offline" else label(m)
+                           for m in metrics]
+    cells = method_rows(statistics, frames, methods, metrics=metrics)
     widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(header)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
     lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cells]

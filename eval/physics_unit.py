@@ -60,12 +60,23 @@ _METRICS = (
                   "than the joint's strength"),
     PhysicsMetric("contact_force_peak_bw", "bw", "floor force peak bw",
                   "peak total normal floor force, body weights"),
+    PhysicsMetric("realtime_fell", "share", "real time: falls %",
+                  "fell, for the real-time balance controller on the same motion: in the "
+                  "offline effort the run its search started from (the warm start; NaN "
+                  "without one), in the real-time effort the run itself"),
+    PhysicsMetric("realtime_fell_or_going_down", "share", "real time: falls or going down %",
+                  "fell_or_going_down, for the real-time balance controller on the same "
+                  "motion (as realtime_fell)"),
+    PhysicsMetric("realtime_joint_error_deg_rms", "deg", "real time: joint error °",
+                  "joint_error_deg_rms, for the real-time balance controller on the same "
+                  "motion (as realtime_fell)"),
 )
 #: The free-root figures, by name: the one registry every writer reads.
 PHYSICS_METRICS = {m.name: m for m in _METRICS}
 #: Shares shown as percentages in the tables.
 PERCENT = frozenset({"fell", "ends_in_trouble", "fell_or_going_down",
-                     "torque_saturation_share"})
+                     "torque_saturation_share", "realtime_fell",
+                     "realtime_fell_or_going_down"})
 
 
 #: The free-root body's efforts (:data:`controller.analysis.EFFORTS`): the real-time
@@ -75,12 +86,46 @@ EFFORTS = ("realtime", "offline")
 _RUN_FIGURES = ("fell", "ends_in_trouble", "fell_or_going_down", "fall_after_window_start_s")
 
 
+#: The real-time controller's figures reported in either effort, by the name they take.
+REALTIME_FIGURES = {"realtime_fell": "fell",
+                    "realtime_fell_or_going_down": "fell_or_going_down",
+                    "realtime_joint_error_deg_rms": "joint_error_deg_rms"}
+
+
+def _figures(summary: dict, whole_run, fall_frame, start: int, fps: float) -> dict:
+    """A run's figures by the names of :data:`PHYSICS_METRICS` (the real-time ones
+    aside): ``summary`` those of its window, ``whole_run()`` those of the whole run."""
+    fell = fall_frame is not None
+    going_down = 0.0 if fell else whole_run()["ends_in_trouble"]
+    return {
+        "fell": 1.0 if fell else 0.0,
+        "ends_in_trouble": going_down,
+        "fell_or_going_down": 1.0 if fell or going_down == 1.0 else 0.0,
+        "fall_after_window_start_s": (fall_frame - start) / fps if fell else math.nan,
+        **{name: summary[name] for name in PHYSICS_METRICS
+           if name not in _RUN_FIGURES and name not in REALTIME_FIGURES},
+    }
+
+
+def _realtime_figures(run, start: int, stop: int, fps: float) -> dict:
+    """The figures of a real-time controller's run (:class:`controller.balance.run.BalanceRun`)."""
+    from controller.balance.run import window_summary
+
+    return _figures(window_summary(run, start, stop),
+                    lambda: window_summary(run, 0, run.n_frames), run.fall_frame, start, fps)
+
+
 def simulate_unit(model, motion, start: int, stop: int,
                   config: ControllerConfig = DEFAULT,
                   effort: str = "realtime") -> dict[str, float]:
     """Run the free-root body over ``motion`` with ``config`` and the figures of its
     window: the real-time balance controller (``effort="realtime"``) or the offline
-    effort's sampling search (``"offline"``, :func:`controller.offline.perform`)."""
+    effort's sampling search (``"offline"``, :func:`controller.offline.perform`).
+
+    The real-time controller's figures on the same motion come with either effort
+    (:data:`REALTIME_FIGURES`): the offline effort's search starts from its run (the warm
+    start), so that the study reports both efforts from one run.
+    """
     from controller import to_qpos
 
     qpos = to_qpos(model, motion)
@@ -89,31 +134,18 @@ def simulate_unit(model, motion, start: int, stop: int,
         from controller.offline.window import window_figures
 
         result = perform(model, qpos, motion.fps, config)
-        summary = window_figures(model, result, qpos, start, stop, config)
-        fall_frame = result.tracking.fall_frame
         n_frames = result.tracking.n_frames
-
-        def whole_run():
-            return window_figures(model, result, qpos, 0, n_frames, config)
+        out = _figures(window_figures(model, result, qpos, start, stop, config),
+                       lambda: window_figures(model, result, qpos, 0, n_frames, config),
+                       result.tracking.fall_frame, start, motion.fps)
+        realtime = (_realtime_figures(result.realtime, start, stop, motion.fps)
+                    if result.realtime is not None else None)
     elif effort == "realtime":
         from controller.balance.follow import follow
-        from controller.balance.run import window_summary
 
-        run = follow(model, qpos, motion.fps, config=config)
-        summary = window_summary(run, start, stop)
-        fall_frame, n_frames = run.fall_frame, run.n_frames
-
-        def whole_run():
-            return window_summary(run, 0, n_frames)
+        out = realtime = _realtime_figures(follow(model, qpos, motion.fps, config=config),
+                                           start, stop, motion.fps)
     else:
         raise ValueError(f"unknown effort {effort!r} (efforts: {', '.join(EFFORTS)})")
-    fell = fall_frame is not None
-    going_down = 0.0 if fell else whole_run()["ends_in_trouble"]
-    return {
-        "fell": 1.0 if fell else 0.0,
-        "ends_in_trouble": going_down,
-        "fell_or_going_down": 1.0 if fell or going_down == 1.0 else 0.0,
-        "fall_after_window_start_s": ((fall_frame - start) / motion.fps if fell
-                                      else math.nan),
-        **{name: summary[name] for name in PHYSICS_METRICS if name not in _RUN_FIGURES},
-    }
+    return {**out, **{name: realtime[figure] if realtime is not None else math.nan
+                      for name, figure in REALTIME_FIGURES.items()}}

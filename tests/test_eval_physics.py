@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from eval.physics import PHYSICS_METRICS, run_physics
+from eval.physics_unit import REALTIME_FIGURES
 from eval.records import Records
 from eval.runs import StudyIncomplete
 from eval.study import STUDY_METHODS, StudyConfig, run_study
@@ -44,8 +45,12 @@ def test_every_method_and_the_real_windows_have_finite_physics_figures(local_run
         assert set(down) <= {0.0, 1.0} and not np.any((down == 1.0) & (fell == 1.0))
         either = records.values(kind, 20, method, "fell_or_going_down")
         np.testing.assert_array_equal(either, np.maximum(fell, down))
+        # in the real-time effort, the real-time controller's figures are the run's own
+        for name, figure in REALTIME_FIGURES.items():
+            np.testing.assert_array_equal(records.values(kind, 20, method, name),
+                                          records.values(kind, 20, method, figure))
         for metric in PHYSICS_METRICS:
-            if metric in ("fell", "fall_after_window_start_s"):
+            if metric in ("fell", "fall_after_window_start_s", "realtime_fell"):
                 continue
             values = records.values(kind, 20, method, metric)
             up = fell == 0.0
@@ -159,7 +164,8 @@ def test_the_offline_effort_performs_a_real_window_with_the_same_figures(study):
     """One real window of the study performed by the offline effort (a small search: 24
     samples, one pass), scored with the real-time test's figures: every figure is there,
     the body stands on the floor (about one body weight on it) and follows the window
-    within a few degrees."""
+    within a few degrees; the real-time controller's figures beside them are those of the
+    real-time effort's own run of the window (the search's warm start is that run)."""
     from controller.config import DEFAULT
     from eval.pairs import draw_real_windows
     from eval.physics import Unit, context_frames, unit_motion
@@ -177,6 +183,9 @@ def test_the_offline_effort_performs_a_real_window_with_the_same_figures(study):
     assert 0.8 < figures["contact_force_peak_bw"] < 4.0, figures
     assert 0.0 < figures["joint_error_deg_rms"] < 12.0, figures
     assert 0.0 <= figures["torque_saturation_share"] <= 1.0
+    realtime = simulate_unit(model, motion, start, stop, small, effort="realtime")
+    for name, figure in REALTIME_FIGURES.items():
+        assert figures[name] == pytest.approx(realtime[figure], abs=1e-6), name
     with pytest.raises(ValueError, match="unknown effort 'fast'"):
         simulate_unit(model, motion, start, stop, small, effort="fast")
 

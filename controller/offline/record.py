@@ -38,6 +38,9 @@ class OfflineResult:
     tracking : controller.tracking.Tracking
         The replay as a free-root tracking run (``mode="free"``): what the reports read.
     outcome : controller.offline.samcon.SearchOutcome
+    realtime : controller.balance.run.BalanceRun or None
+        The real-time controller's run the search started from (the warm start's: the
+        real-time effort on the same reference); None without a warm start.
     """
 
     qpos: np.ndarray
@@ -52,6 +55,7 @@ class OfflineResult:
     wall_s: float
     tracking: Tracking
     outcome: SearchOutcome
+    realtime: object = None
 
     def __getattr__(self, name):
         # the rest of a tracking run's figures (fallen, limit_rows, ...): the replay's, so
@@ -126,12 +130,12 @@ def perform(model, qpos_ref, fps: float, config: ControllerConfig = DEFAULT,
 
     clock = time.perf_counter()
     plan = plan_tracking(model, np.asarray(qpos_ref, dtype=float), fps, "free", True, config)
-    warmed = False
+    warmed, realtime = False, None
     if config.offline.warm_start:
         from controller.offline.warm import warm_plan
 
         warm = warm_plan(model, plan, config)
-        plan, warmed = warm.plan, warm.used_frames > 0
+        plan, warmed, realtime = warm.plan, warm.used_frames > 0, warm.realtime_run
     outcome = search(model, plan, config, progress, keep_plan_path=warmed)
     run = track_plan(model, replace(plan, ctrl=outcome.ctrl), config)
     wall = time.perf_counter() - clock
@@ -141,4 +145,4 @@ def perform(model, qpos_ref, fps: float, config: ControllerConfig = DEFAULT,
                          heading_error_deg=heading,
                          saturation_share=run.saturation_share(),
                          samples=outcome.rollouts, wall_s=wall, tracking=run,
-                         outcome=outcome)
+                         outcome=outcome, realtime=realtime)

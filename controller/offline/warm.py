@@ -47,11 +47,15 @@ class WarmStart:
     used_frames : int
         Frames (from the start) whose targets are the real-time run's (0 where it fell).
     realtime_fell : bool
+    realtime_run : controller.balance.run.BalanceRun
+        The real-time controller's run itself (its figures are the real-time effort's on
+        the same reference: the study reports them beside the offline effort's).
     """
 
     plan: object
     used_frames: int
     realtime_fell: bool
+    realtime_run: object = None
 
 
 def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
@@ -75,7 +79,7 @@ def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
 
     run = follow(model, plan.reference_qpos, plan.fps, config=config)
     if run.fell or run.diverged_frame is not None:
-        return WarmStart(plan=plan, used_frames=0, realtime_fell=True)
+        return WarmStart(plan=plan, used_frames=0, realtime_fell=True, realtime_run=run)
     if abs(run.timestep_s - float(plan.model.opt.timestep)) > 1e-12 \
             or run.substeps != plan.substeps:
         raise ValueError("the real-time run's physics step is not the plan's")
@@ -92,4 +96,5 @@ def warm_plan(model, plan, config: ControllerConfig = DEFAULT) -> WarmStart:
     ctrl[:steps] = angles[:steps] + run.ctrl[:steps] / kp
     warm = replace(plan, model=sim, ctrl=ctrl, start_qpos=run.start_qpos.copy(),
                    start_qvel=run.start_qvel.copy())
-    return WarmStart(plan=warm, used_frames=steps // plan.substeps + 1, realtime_fell=False)
+    return WarmStart(plan=warm, used_frames=steps // plan.substeps + 1, realtime_fell=False,
+                     realtime_run=run)

@@ -295,7 +295,7 @@ def run(args) -> int:
               f"{physics.workers} {physics.executor} workers, "
               f"{physics.wall_s:.0f} s" + (f", {physics.resumed} runs resumed" if
                                            physics.resumed else "") + "):")
-        print(physics_text(physics.statistics, frames, methods))
+        print(physics_text(physics.statistics, frames, methods, effort))
     print("\n".join(legend([
         f"Written to {out}/: summary.md (every table with 95 % intervals: all the metrics, "
         "the paired tests by group, the calibration per clip, the in-betweening figures), "
