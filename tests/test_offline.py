@@ -92,7 +92,7 @@ def test_segments_cover_the_motion():
     assert segment_bounds(50, 120, 0.2) == [0, 24, 48, 49]
 
 
-def test_simulate_with_the_offline_effort_writes_its_report(tmp_path, data_dir):
+def test_simulate_with_the_offline_effort_writes_its_report(tmp_path, data_dir, capsys):
     config = tmp_path / "small.toml"
     config.write_text("[offline]\nsamples = 16\nkeep = 4\n")
     report = tmp_path / "r.json"
@@ -109,3 +109,22 @@ def test_simulate_with_the_offline_effort_writes_its_report(tmp_path, data_dir):
     assert {"fell", "error_deg_rms", "body_error_mm_mean",
             "torque_saturation_share"} <= set(free)
     assert out["windows"][0]["tracking"]["free"]["frames"] == 10
+    # the real-time controller's run the search started from (its warm start), beside it
+    realtime = free["realtime"]
+    assert set(realtime) == {"fell", "fall_time_s", "ends_in_trouble", "error_deg_rms",
+                             "body_error_mm_mean"}
+    assert (realtime["fall_time_s"] is None) == (not realtime["fell"])
+    assert realtime["fell"] or 0.0 < realtime["error_deg_rms"] < 15.0
+    assert "the real-time controller, whose run the search started from: " in \
+        capsys.readouterr().out
+
+
+def test_the_real_time_line_says_how_the_search_s_start_ended():
+    from upm.commands.simulate_summary import realtime_line
+
+    assert realtime_line({"fell": True, "fall_time_s": 1.234, "ends_in_trouble": False,
+                          "error_deg_rms": 3.21, "body_error_mm_mean": 40.0}).endswith(
+        "started from: falls at 1.23 s, joint error 3.2 deg RMS")
+    assert realtime_line({"fell": False, "fall_time_s": None, "ends_in_trouble": True,
+                          "error_deg_rms": None, "body_error_mm_mean": None}).endswith(
+        "started from: does not fall but ends in trouble")

@@ -285,58 +285,58 @@ def test_strength_multiplies_every_torque_limit_the_controller_may_use(tmp_path,
 
 
 def test_the_search_is_summed_up_in_one_line():
-    from upm.commands.simulate import _search_line
+    from upm.commands.simulate_summary import search_line
 
     troubles = [
         {"frame": 94, "time_s": 0.78333, "cause": ["pelvis low"], "retries": 96,
          "rerun_s": 19.175, "outcome": "got past"},
         {"frame": 129, "time_s": 1.075, "cause": ["pelvis low", "tilted"], "retries": 51,
          "rerun_s": 15.95833, "outcome": "budget spent"}]
-    assert _search_line(troubles) == (
+    assert search_line(troubles) == (
         "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
         "again; got past 1; gave up at 1.07 s (pelvis low and tilted: budget spent)")
     # with the seconds by mode (reports of this version): summed over the troubles
     troubles[0]["rerun_s_by_mode"] = [0.0, 4.0, 5.0, 0.0, 10.175, 0.0]
     troubles[1]["rerun_s_by_mode"] = [0.5, 1.0, 2.0, 3.0, 4.0, 5.45833]
-    assert _search_line(troubles) == (
+    assert search_line(troubles) == (
         "  search: 2 troubles (first at 0.78 s), 147 retries running 35.1 simulated s "
         "again; got past 1 (seconds run again by the mode tried, 0-5: 0.5 / 5.0 / 7.0 / "
         "3.0 / 14.2 / 5.5); gave up at 1.07 s (pelvis low and tilted: budget spent)")
 
 
 def test_the_error_by_mode_in_one_line():
-    from upm.commands.simulate import _by_mode_line
+    from upm.commands.simulate_summary import by_mode_line
 
     free = {"search_mode_share": 0.30612, "error_deg_rms_search_modes": 6.04,
             "body_error_mm_mean_search_modes": 81.6, "error_deg_rms_default_mode": 3.1,
             "body_error_mm_mean_default_mode": 31.2}
-    assert _by_mode_line(free) == (
+    assert by_mode_line(free) == (
         "  error by mode: the 31 % of the frames the search changed 6.0 deg / 82 mm, the "
         "rest (the default mode) 3.1 deg / 31 mm")
     # every frame changed: no default-mode figure
     free.update(search_mode_share=1.0, error_deg_rms_default_mode=None,
                 body_error_mm_mean_default_mode=None)
-    assert _by_mode_line(free).endswith("the rest (the default mode) -")
+    assert by_mode_line(free).endswith("the rest (the default mode) -")
     # no search, or a report from before the split: no line
-    assert _by_mode_line({"search_mode_share": 0.0}) == ""
-    assert _by_mode_line({}) == ""
+    assert by_mode_line({"search_mode_share": 0.0}) == ""
+    assert by_mode_line({}) == ""
 
 
 def test_the_joints_most_often_at_full_strength_in_one_line():
-    from upm.commands.simulate import _strength_line
+    from upm.commands.simulate_summary import strength_line
 
     by_actuator = {name: {"peak_nm": 1.0, "mean_nm": 0.5, "range_nm": [-1.0, 1.0],
                           "saturation_share": share}
                    for name, share in (("lfemur_rx", 0.1844), ("rfoot_rx", 0.12766),
                                        ("ltoes_rx", 0.0), ("lfoot_rx", 0.11348),
                                        ("rfemur_rz", 0.0922))}
-    assert _strength_line(by_actuator) == (
+    assert strength_line(by_actuator) == (
         "  at full strength most often: lfemur_rx 18.4 %, rfoot_rx 12.8 %, lfoot_rx 11.3 % "
         "of the frames")
-    assert _strength_line({"ltoes_rx": by_actuator["ltoes_rx"]}) == ""
+    assert strength_line({"ltoes_rx": by_actuator["ltoes_rx"]}) == ""
     for name, concentric in (("lfemur_rx", 0.1212), ("rfoot_rx", 0.33), ("lfoot_rx", 0.3125)):
         by_actuator[name]["saturated_concentric_share"] = concentric
-    assert _strength_line(by_actuator) == (
+    assert strength_line(by_actuator) == (
         "  at full strength most often (share of the frames; of those, concentric: the joint "
         "turning the way it pushes): lfemur_rx 18.4 % (12 %), rfoot_rx 12.8 % (33 %), "
         "lfoot_rx 11.3 % (31 %)")

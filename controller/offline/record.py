@@ -100,7 +100,30 @@ class OfflineResult:
                 "searched_segments": out.searched_segments,
                 "wall_s": round(self.wall_s, 3),
                 "wall_s_per_sim_s": (round(self.wall_s / self.seconds, 3)
-                                     if self.seconds > 0 else None)}
+                                     if self.seconds > 0 else None),
+                "realtime": self.realtime_summary()}
+
+    def realtime_summary(self) -> dict | None:
+        """The real-time controller's run the search started from (:attr:`realtime`), its
+        whole-run figures, JSON-ready: ``fell``, ``fall_time_s``, ``ends_in_trouble``,
+        ``error_deg_rms``, ``body_error_mm_mean``; None without a warm start."""
+        from controller.balance.run import window_summary
+
+        if self.realtime is None:
+            return None
+        figures = window_summary(self.realtime, 0, self.realtime.n_frames)
+
+        def finite(key, digits):
+            value = figures[key]
+            return None if not np.isfinite(value) else round(float(value), digits)
+
+        return {"fell": bool(self.realtime.fell),
+                "fall_time_s": (None if not self.realtime.fell
+                                else round(float(self.realtime.fall_time_s), 4)),
+                "ends_in_trouble": (not self.realtime.fell
+                                    and figures["ends_in_trouble"] == 1.0),
+                "error_deg_rms": finite("joint_error_deg_rms", 4),
+                "body_error_mm_mean": finite("body_error_mm_mean", 2)}
 
 def perform(model, qpos_ref, fps: float, config: ControllerConfig = DEFAULT,
             progress: bool = False) -> OfflineResult:
