@@ -66,9 +66,12 @@ checkpoint: a run with another configuration starts afresh).
 real-time controller: a sampling search over the servos' targets (controller.offline, its
 [offline] section of --config) that asks whether the body can perform the motion at all.
 It costs about 20 wall s a run on two threads (30 pairs of 4 methods and their real
-windows: 150 runs, about 50 minutes on 2 cores); choose the methods with --methods. The
-default stays the real-time controller, for its cost; the checkpoint keeps the effort (a
-run of the other effort starts afresh).
+windows: 150 runs, about 50 minutes on 2 cores); choose the methods with --methods. Its
+search starts from the real-time controller's run of each motion, so the real-time
+controller's falls and joint error on the same runs are reported beside its own
+(realtime_* in physics.csv, a second table in summary.md). The default stays the
+real-time controller, for its cost; the checkpoint keeps the effort (a run of the other
+effort starts afresh).
 
 Examples:
   upm eval --out upm-eval
