@@ -125,6 +125,7 @@ class OfflineResult:
                 "error_deg_rms": finite("joint_error_deg_rms", 4),
                 "body_error_mm_mean": finite("body_error_mm_mean", 2)}
 
+
 def perform(model, qpos_ref, fps: float, config: ControllerConfig = DEFAULT,
             progress: bool = False) -> OfflineResult:
     """The reference as the free-root humanoid performs it in the offline effort.
