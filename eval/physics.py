@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from controller.config import DEFAULT, ControllerConfig
-from eval.physics_unit import EFFORTS, PHYSICS_METRICS, simulate_unit
+from eval.physics_unit import DEFAULT_EFFORT, EFFORTS, PHYSICS_METRICS, simulate_unit
 from eval.records import REAL, Records
 from eval.runs import Checkpoint, StudyIncomplete, run_checkpointed
 
@@ -122,7 +122,7 @@ _WORKER: dict = {}
 
 def init_worker(config, pairs: dict, real_windows: dict,
                 controller_config: ControllerConfig = DEFAULT,
-                effort: str = "realtime") -> None:
+                effort: str = DEFAULT_EFFORT) -> None:
     """Load the study's data once per worker process (idempotent), and keep the
     controller's configuration and effort for its units."""
     from eval.runs import single_threaded_blas
@@ -141,7 +141,7 @@ def run_unit(unit: Unit) -> dict[str, float]:
     model, motion, start, stop = unit_motion(_WORKER["data"], unit, _WORKER["pairs"],
                                              _WORKER["real_windows"])
     return simulate_unit(model, motion, start, stop, _WORKER["controller_config"],
-                         _WORKER.get("effort", "realtime"))
+                         _WORKER.get("effort", DEFAULT_EFFORT))
 
 
 def records_of(units: list[Unit], done: dict[str, dict[str, float]],
@@ -229,14 +229,14 @@ class PhysicsResult:
     workers: int
     wall_s: float
     controller_config: ControllerConfig = DEFAULT
-    effort: str = "realtime"
+    effort: str = DEFAULT_EFFORT
 
 
 def run_physics(result, n_pairs: int, out_dir, executor: str = "local",
                 address: str | None = None, workers: int | None = None,
                 show_progress: bool = True,
                 controller_config: ControllerConfig = DEFAULT,
-                effort: str = "realtime") -> PhysicsResult:
+                effort: str = DEFAULT_EFFORT) -> PhysicsResult:
     """Run the free-root test on the first ``n_pairs`` pairs of a study.
 
     Parameters

@@ -82,6 +82,10 @@ PERCENT = frozenset({"fell", "ends_in_trouble", "fell_or_going_down",
 #: The free-root body's efforts (:data:`controller.analysis.EFFORTS`): the real-time
 #: balance controller, or the offline effort's sampling search.
 EFFORTS = ("realtime", "offline")
+#: The study's free-root test's effort unless told (issue 61: the physics column asks
+#: whether a body can perform the window at all, not whether one real-time controller
+#: happens to carry it; the real-time controller's figures come from the same runs).
+DEFAULT_EFFORT = "offline"
 #: The figures of the whole run, not taken from the window's summary as they are.
 _RUN_FIGURES = ("fell", "ends_in_trouble", "fell_or_going_down", "fall_after_window_start_s")
 

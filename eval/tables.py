@@ -224,7 +224,7 @@ def summary_markdown(result_meta: dict, statistics: Summaries) -> str:
         "below 5 cm counts too, so real walks score well above zero; compare methods with "
         "each other and with the calibration row.",
         "- Tracking error: the humanoid's servos (human torque limits) follow the motion with "
-        "the root driven along it. With the root free, the balance controller performs "
+        "the root driven along it. With the root free, the humanoid performs "
         "the window in the free-root test (`upm eval --physics`, its own section).",
     ]
     for frames in protocol["windows"]:

@@ -28,7 +28,8 @@ def study(data_dir):
 @pytest.fixture(scope="module")
 def local_run(study, tmp_path_factory):
     out = tmp_path_factory.mktemp("physics-local")
-    return run_physics(study, PAIRS, out, executor="local", workers=2, show_progress=False)
+    return run_physics(study, PAIRS, out, executor="local", workers=2, show_progress=False,
+                       effort="realtime")
 
 
 def test_every_method_and_the_real_windows_have_finite_physics_figures(local_run):
@@ -77,9 +78,9 @@ def test_ray_gives_the_same_records_as_the_local_pool(data_dir, tmp_path):
                          methods=("upm", "linear"))
     small = run_study(config, workers=2, show_progress=False)
     local = run_physics(small, 1, tmp_path / "local", executor="local", workers=2,
-                        show_progress=False)
+                        show_progress=False, effort="realtime")
     ray_run = run_physics(small, 1, tmp_path / "ray", executor="ray", workers=2,
-                          show_progress=False)
+                          show_progress=False, effort="realtime")
     assert len(local.records.to_csv().splitlines()) > 3  # a header and the three runs
     assert ray_run.records.to_csv() == local.records.to_csv()
     assert ray_run.statistics == local.statistics
@@ -142,22 +143,37 @@ def test_the_controller_configuration_reaches_the_workers_and_keys_the_checkpoin
     monkeypatch.setattr(physics, "simulate_unit", figures_of)
     other = DEFAULT.updated({"placement": {"gain": 0.45}})
     first = run_physics(study, PAIRS, tmp_path, workers=2, show_progress=False,
-                        controller_config=other)
+                        controller_config=other, effort="realtime")
     assert set(first.records.values("pair", 20, "linear", "joint_error_deg_rms")) == {0.45}
     assert physics_document(first)["protocol"]["controller_config"] == other.as_dict()
     again = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False,
-                        controller_config=other)
+                        controller_config=other, effort="realtime")
     assert again.resumed == len(again.records) // len(PHYSICS_METRICS) > 0
     default = run_physics(study, PAIRS, tmp_path, workers=1, show_progress=False)
     assert default.resumed == 0
-    assert set(default.records.values("real", 20, "real", "joint_error_deg_rms")) == {0.3}
-    # the effort keys the checkpoint too, and reaches the workers
-    offline = run_physics(study, PAIRS, tmp_path, workers=2, show_progress=False,
-                          effort="offline")
-    assert offline.resumed == 0
-    assert set(offline.records.values("real", 20, "real", "joint_error_deg_rms")) == {1.3}
-    assert physics_document(offline)["protocol"]["effort"] == "offline"
-    assert physics_document(default)["protocol"]["effort"] == "realtime"
+    assert set(default.records.values("real", 20, "real", "joint_error_deg_rms")) == {1.3}
+    # the effort keys the checkpoint too, and reaches the workers; the default is offline
+    realtime = run_physics(study, PAIRS, tmp_path, workers=2, show_progress=False,
+                           effort="realtime")
+    assert realtime.resumed == 0
+    assert set(realtime.records.values("real", 20, "real", "joint_error_deg_rms")) == {0.3}
+    assert physics_document(realtime)["protocol"]["effort"] == "realtime"
+    assert physics_document(default)["protocol"]["effort"] == "offline"
+
+
+@pytest.mark.parametrize("args, effort", [
+    (["--physics"], "offline"),
+    (["--physics", "--threads", "1"], "offline"),
+    (["--physics", "--effort", "realtime"], "realtime"),
+    (["--physics", "--effort", "offline"], "offline"),
+])
+def test_the_free_root_test_is_the_offline_effort_unless_told(args, effort):
+    """Issue 61: the physics column asks whether a body can perform the window (the
+    offline effort, the real-time controller's figures beside it)."""
+    from upm.cli import build_parser
+    from upm.commands.eval import physics_effort
+
+    assert physics_effort(build_parser().parse_args(["eval", *args])) == effort
 
 
 def test_the_offline_effort_performs_a_real_window_with_the_same_figures(study):
@@ -238,6 +254,10 @@ def test_a_failing_output_leaves_no_half_written_folder(data_dir, tmp_path, monk
     (["--address", "ray://head:10001"], "--address goes with --executor ray"),
     (["--config", "c.toml"], "--config sets the free-root test's controller"),
     (["--physics", "--config", "nosuch.toml"], "nosuch.toml: cannot read"),
+    (["--effort", "offline"], "--effort goes with --physics"),
+    (["--threads", "2"], "--threads goes with --physics"),
+    (["--physics", "--effort", "realtime", "--threads", "2"], "--threads is the offline"),
+    (["--physics", "--threads", "0"], "--threads 0: use a whole number from 1 to 64"),
 ])
 def test_bad_physics_arguments_are_one_line_errors(data_dir, tmp_path, capsys, args, message):
     from upm.cli import main

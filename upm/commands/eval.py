@@ -52,35 +52,31 @@ about 40 % to the default study (measured on a shared, loaded 2-core machine: 49
 instead of 355 s; --inbetween 0 skips it). The pairs of a smaller study are the first
 pairs of a larger one with the same seed, scored identically.
 
-The free-root test costs about 5 s of CPU per run (pairs x methods + real windows; 60
-pairs: 600 runs, about half an hour on 2 cores): --physics-pairs chooses how many of
-the pairs get it. It runs on a local process pool, or on Ray (--executor ray: a local
-Ray instance, or an existing cluster with --address ray://HEAD:10001 or HEAD:6379:
-docs/guides/ray-cluster.md). Ctrl-C or SIGTERM stops it at any time. Finished runs are kept in
-OUT/physics-partial.jsonl as they come: if runs fail or the command is stopped, the
-same command completes only what is missing. --config FILE.toml changes the balance
+The free-root test asks whether a body can perform each window (pairs x methods + real
+windows; --physics-pairs chooses how many of the pairs get it). By default the offline
+effort performs it: a sampling search over the servos' targets (controller.offline, its
+[offline] section of --config) that starts from the real-time balance controller's run of
+the motion, so the real-time controller's falls and joint error on the same runs are
+reported beside its own (realtime_* in physics.csv, a second table in summary.md). It
+costs about 20 wall s a run on two threads (30 pairs of 3 methods and their real
+windows: 120 runs, about 70 minutes on 2 cores). --effort realtime has the real-time
+controller alone perform it: about 5 s of CPU a run (60 pairs: 600 runs, about half an
+hour on 2 cores). The checkpoint keeps the effort (a run of the other effort starts
+afresh). It runs on a local process pool, or on Ray (--executor ray: a local Ray
+instance, or an existing cluster with --address ray://HEAD:10001 or HEAD:6379:
+docs/guides/ray-cluster.md). Ctrl-C or SIGTERM stops it at any time. Finished runs are
+kept in OUT/physics-partial.jsonl as they come: if runs fail or the command is stopped,
+the same command completes only what is missing. --config FILE.toml changes the balance
 controller's tuning constants for the free-root test (recorded in results.json and in the
 checkpoint: a run with another configuration starts afresh).
-
---effort offline has the free-root test performed by the offline effort instead of the
-real-time controller: a sampling search over the servos' targets (controller.offline, its
-[offline] section of --config) that asks whether the body can perform the motion at all.
-It costs about 20 wall s a run on two threads (30 pairs of 4 methods and their real
-windows: 150 runs, about 50 minutes on 2 cores); choose the methods with --methods. Its
-search starts from the real-time controller's run of each motion, so the real-time
-controller's falls and joint error on the same runs are reported beside its own
-(realtime_* in physics.csv, a second table in summary.md). The default stays the
-real-time controller, for its cost; the checkpoint keeps the effort (a run of the other
-effort starts afresh).
 
 Examples:
   upm eval --out upm-eval
   upm eval --full --out upm-eval-full
   upm eval --pairs 100 --windows 10,20 --seed 1 --workers 2 --out study
-  upm eval --physics --pairs 60 --out upm-eval-physics
-  upm eval --physics --effort offline --pairs 30 --methods upm linear slerp feasible \
-      --out upm-eval-offline
-  upm eval --physics --pairs 60 --executor ray --address ray://head-node:10001
+  upm eval --physics --pairs 30 --methods upm linear feasible --out upm-eval-physics
+  upm eval --physics --effort realtime --pairs 60 --out upm-eval-realtime
+  upm eval --physics --effort realtime --pairs 60 --executor ray --address ray://head:10001
 """
 
 from __future__ import annotations
@@ -97,6 +93,7 @@ DEFAULT_OUT = "upm-eval"
 
 
 def configure(parser) -> None:
+    from eval.physics_unit import EFFORTS
     from upm.commands.common import add_config_argument, add_data_argument
 
     add_data_argument(parser)
@@ -134,11 +131,12 @@ def configure(parser) -> None:
     parser.add_argument("--physics-pairs", type=int, metavar="N", default=None,
                         help="pairs that get the free-root test: the study's first N "
                              "(default: all of --pairs)")
-    parser.add_argument("--effort", choices=("realtime", "offline"), default=None,
-                        help="who performs the --physics runs: 'realtime' (default) the "
-                             "real-time balance controller; 'offline' the offline effort's "
-                             "sampling search over the servos' targets (about 15 wall s per "
-                             "simulated s on two threads: some 20 s a run)")
+    parser.add_argument("--effort", choices=EFFORTS, default=None,
+                        help="who performs the --physics runs: 'offline' (default) the "
+                             "offline effort's sampling search over the servos' targets, "
+                             "the real-time controller's figures beside it (about 15 wall s "
+                             "per simulated s on two threads: some 20 s a run); 'realtime' "
+                             "the real-time balance controller alone (some 5 s a run)")
     parser.add_argument("--threads", metavar="N", type=int, default=None,
                         help="threads of each offline run's rollouts (default: [offline] "
                              "threads, 2; the workers default to the cores divided by them; "
@@ -172,6 +170,33 @@ def parse_windows(text: str | None, default) -> tuple[int, ...]:
     if len(set(values)) != len(values):
         raise UsageError(f"--windows {text}: a window length is repeated")
     return values
+
+
+def physics_effort(args) -> str:
+    """The free-root test's effort of parsed ``upm eval`` arguments (:data:`DEFAULT_EFFORT
+    <eval.physics_unit.DEFAULT_EFFORT>` unless told), ``--threads`` checked with it.
+
+    Raises
+    ------
+    UsageError
+        ``--effort`` or ``--threads`` without ``--physics``, ``--threads`` with the
+        real-time effort or out of 1..64.
+    """
+    from eval.physics_unit import DEFAULT_EFFORT
+    from upm.core.errors import UsageError
+
+    if args.effort is not None and not args.physics:
+        raise UsageError("--effort goes with --physics (the free-root test's performer)")
+    effort = args.effort or DEFAULT_EFFORT
+    if args.threads is not None:
+        if not args.physics:
+            raise UsageError("--threads goes with --physics (the offline effort's rollouts)")
+        if effort != "offline":
+            raise UsageError("--threads is the offline effort's: --effort realtime has no "
+                             "threads")
+        if not 1 <= args.threads <= 64:
+            raise UsageError(f"--threads {args.threads}: use a whole number from 1 to 64")
+    return effort
 
 
 def run(args) -> int:
@@ -222,14 +247,7 @@ def run(args) -> int:
     if args.config is not None and not args.physics:
         raise UsageError("--config sets the free-root test's controller: it goes with "
                          "--physics")
-    effort = args.effort or "realtime"
-    if args.effort is not None and not args.physics:
-        raise UsageError("--effort goes with --physics (the free-root test's performer)")
-    if args.threads is not None:
-        if effort != "offline":
-            raise UsageError("--threads is the offline effort's: add --physics --effort offline")
-        if not 1 <= args.threads <= 64:
-            raise UsageError(f"--threads {args.threads}: use a whole number from 1 to 64")
+    effort = physics_effort(args)
     physics_config = controller_config(args, unused=("residual", "window_runs")
                                        ).with_threads(args.threads)
     from eval.executor import check_executor
