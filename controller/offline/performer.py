@@ -77,7 +77,8 @@ def perform_transition(transition, context_s: float | None = None, config=None):
     a = max(0, w0 - round(lead * fps))
     b = min(n, w1 + round(tail * fps))
     asked = to_qpos(model, motion)
-    result = perform(model, asked[a:b], fps, config)
+    result = perform(model, asked[a:b], fps, config.updated(
+        {"offline": {"warm_start": config.offline.performed_warm_start}}))
     inside = slice(w0 - a, w1 - a)
     qpos = result.qpos
     finite = np.all(np.isfinite(qpos), axis=1)
