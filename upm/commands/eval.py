@@ -126,8 +126,8 @@ def configure(parser) -> None:
     parser.add_argument("--no-figures", dest="figures", action="store_false",
                         help="skip the figures (no rendering)")
     parser.add_argument("--physics", action="store_true",
-                        help="add the free-root test: the balance controller performs every "
-                             "window (about 1 s of CPU per pair x method)")
+                        help="add the free-root test: the humanoid, root free, performs "
+                             "every window (--effort: the offline effort by default)")
     parser.add_argument("--physics-pairs", type=int, metavar="N", default=None,
                         help="pairs that get the free-root test: the study's first N "
                              "(default: all of --pairs)")
