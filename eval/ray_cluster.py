@@ -42,8 +42,11 @@ from upm.core.errors import UsageError
 #: The token file Ray reads when neither environment variable is set.
 DEFAULT_TOKEN_FILE = Path("~") / ".ray" / "auth_token"
 #: Ray Client's specific server can die while it starts (a gRPC fork race in Ray's proxy,
-#: ray-project/ray#63202): the message it answers with then.
-CLIENT_START_FAILED = "Starting Ray client server failed"
+#: ray-project/ray#63202): the messages ``ray.init`` fails with then (the proxy's answer,
+#: and psutil's when the proxy looks at the server process after it died, seen on a
+#: loaded two-core machine).
+CLIENT_START_FAILED = ("Starting Ray client server failed",
+                       "PID still exists but it's a zombie")
 
 
 @dataclass(frozen=True)
@@ -349,6 +352,12 @@ def check_cluster(text: str, limits: ConnectLimits | None = None) -> tuple[Clust
     return address, auth
 
 
+def is_client_start_failure(exc: BaseException) -> bool:
+    """Whether ``ray.init`` failed because Ray Client's server died while it started
+    (:data:`CLIENT_START_FAILED`): worth one more try."""
+    return any(marker in str(exc) for marker in CLIENT_START_FAILED)
+
+
 @contextlib.contextmanager
 def cluster_connection(ray, text: str, options: dict, limits: ConnectLimits | None = None):
     """Connected to the cluster at ``text`` for the body: :func:`check_cluster`, then
@@ -369,7 +378,7 @@ def cluster_connection(ray, text: str, options: dict, limits: ConnectLimits | No
                 break
             except Exception as exc:  # every way ray.init fails: one line naming the address
                 last = (str(exc).strip().splitlines() or [type(exc).__name__])[-1][:300]
-                transient = address.client and CLIENT_START_FAILED in str(exc)
+                transient = address.client and is_client_start_failure(exc)
                 with contextlib.suppress(Exception):
                     ray.shutdown()
                 if not (transient and attempt < limits.client_start_retries):

@@ -17,6 +17,7 @@ pytest.importorskip("ray")
 
 import eval.ray_cluster as ray_cluster  # noqa: E402
 from eval.ray_cluster import ConnectLimits, parse_address  # noqa: E402
+from upm.core.errors import UsageError  # noqa: E402
 
 
 def _run(tmp_path, capsys, *args, command="eval"):
@@ -186,3 +187,44 @@ def test_the_token_is_found_where_ray_looks_and_never_shown(tmp_path, no_token, 
     for message in (ray_cluster.explain(parse_address("h:1"), auth, status, "detail")
                     for status in ("auth", "not_ray", "no_answer", "error")):
         assert secret not in message
+
+
+class _FlakyRay:
+    """A stand-in for ``ray`` whose ``init`` fails with the given errors first."""
+
+    def __init__(self, *errors):
+        self.errors, self.inits, self.shutdowns = list(errors), 0, 0
+
+    def init(self, address, **options):
+        self.inits += 1
+        if self.errors:
+            raise self.errors.pop(0)
+
+    def shutdown(self):
+        self.shutdowns += 1
+
+
+@pytest.mark.parametrize("message", [
+    "Starting Ray client server failed. See ray_client_server_23000.err for detail logs.",
+    "ConnectionError: ray client connection failed\npsutil.ZombieProcess: PID still exists "
+    "but it's a zombie (pid=7733)",
+])
+def test_a_client_server_that_dies_while_starting_is_tried_again(monkeypatch, message):
+    address = ray_cluster.ray_target(parse_address("ray://127.0.0.1:10001"))
+    auth = ray_cluster.Auth("disabled", None, False)
+    monkeypatch.setattr(ray_cluster, "check_cluster", lambda text, limits=None: (address, auth))
+    ray = _FlakyRay(ConnectionError(message))
+    with ray_cluster.cluster_connection(ray, "ray://127.0.0.1:10001", {}):
+        assert ray.inits == 2
+    assert ray.shutdowns == 2  # after the failed try, and at the end
+
+
+def test_another_connection_error_is_one_line_without_a_second_try(monkeypatch):
+    address = ray_cluster.ray_target(parse_address("ray://127.0.0.1:10001"))
+    auth = ray_cluster.Auth("disabled", None, False)
+    monkeypatch.setattr(ray_cluster, "check_cluster", lambda text, limits=None: (address, auth))
+    ray = _FlakyRay(ConnectionError("version mismatch: the cluster runs Ray 2.9"))
+    with pytest.raises(UsageError, match="ray://127.0.0.1:10001.*version mismatch"):
+        with ray_cluster.cluster_connection(ray, "ray://127.0.0.1:10001", {}):
+            pass
+    assert ray.inits == 1
