@@ -45,7 +45,7 @@ DEFAULT_TOKEN_FILE = Path("~") / ".ray" / "auth_token"
 #: ray-project/ray#63202): the messages ``ray.init`` fails with then (the proxy's answer,
 #: and psutil's when the proxy looks at the server process after it died, seen on a
 #: loaded two-core machine).
-CLIENT_START_FAILED = ("Starting Ray client server failed",
+CLIENT_START_FAILURES = ("Starting Ray client server failed",
                        "PID still exists but it's a zombie")
 
 
@@ -60,7 +60,7 @@ class ConnectLimits:
     answer_s : float
         The probe process: Ray's handshake with the server and the token check.
     client_start_retries : int
-        New tries when Ray Client's server died while starting (:data:`CLIENT_START_FAILED`).
+        New tries when Ray Client's server died while starting (:data:`CLIENT_START_FAILURES`).
     """
 
     reach_s: float = 8.0
@@ -354,8 +354,8 @@ def check_cluster(text: str, limits: ConnectLimits | None = None) -> tuple[Clust
 
 def is_client_start_failure(exc: BaseException) -> bool:
     """Whether ``ray.init`` failed because Ray Client's server died while it started
-    (:data:`CLIENT_START_FAILED`): worth one more try."""
-    return any(marker in str(exc) for marker in CLIENT_START_FAILED)
+    (:data:`CLIENT_START_FAILURES`): worth one more try."""
+    return any(marker in str(exc) for marker in CLIENT_START_FAILURES)
 
 
 @contextlib.contextmanager

@@ -204,27 +204,31 @@ class _FlakyRay:
         self.shutdowns += 1
 
 
+@pytest.fixture
+def checked_client_address(monkeypatch):
+    """A Ray Client address whose check before ``ray.init`` passes without a cluster."""
+    address = ray_cluster.ray_target(parse_address("ray://127.0.0.1:10001"))
+    auth = ray_cluster.Auth("disabled", None, False)
+    monkeypatch.setattr(ray_cluster, "check_cluster", lambda text, limits=None: (address, auth))
+    return address.text
+
+
 @pytest.mark.parametrize("message", [
     "Starting Ray client server failed. See ray_client_server_23000.err for detail logs.",
     "ConnectionError: ray client connection failed\npsutil.ZombieProcess: PID still exists "
     "but it's a zombie (pid=7733)",
 ])
-def test_a_client_server_that_dies_while_starting_is_tried_again(monkeypatch, message):
-    address = ray_cluster.ray_target(parse_address("ray://127.0.0.1:10001"))
-    auth = ray_cluster.Auth("disabled", None, False)
-    monkeypatch.setattr(ray_cluster, "check_cluster", lambda text, limits=None: (address, auth))
+def test_a_client_server_that_dies_while_starting_is_tried_again(checked_client_address,
+                                                                 message):
     ray = _FlakyRay(ConnectionError(message))
-    with ray_cluster.cluster_connection(ray, "ray://127.0.0.1:10001", {}):
+    with ray_cluster.cluster_connection(ray, checked_client_address, {}):
         assert ray.inits == 2
     assert ray.shutdowns == 2  # after the failed try, and at the end
 
 
-def test_another_connection_error_is_one_line_without_a_second_try(monkeypatch):
-    address = ray_cluster.ray_target(parse_address("ray://127.0.0.1:10001"))
-    auth = ray_cluster.Auth("disabled", None, False)
-    monkeypatch.setattr(ray_cluster, "check_cluster", lambda text, limits=None: (address, auth))
+def test_another_connection_error_is_one_line_without_a_second_try(checked_client_address):
     ray = _FlakyRay(ConnectionError("version mismatch: the cluster runs Ray 2.9"))
     with pytest.raises(UsageError, match="ray://127.0.0.1:10001.*version mismatch"):
-        with ray_cluster.cluster_connection(ray, "ray://127.0.0.1:10001", {}):
+        with ray_cluster.cluster_connection(ray, checked_client_address, {}):
             pass
     assert ray.inits == 1
