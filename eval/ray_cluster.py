@@ -46,7 +46,7 @@ DEFAULT_TOKEN_FILE = Path("~") / ".ray" / "auth_token"
 #: and psutil's when the proxy looks at the server process after it died, seen on a
 #: loaded two-core machine).
 CLIENT_START_FAILURES = ("Starting Ray client server failed",
-                       "PID still exists but it's a zombie")
+                         "PID still exists but it's a zombie")
 
 
 @dataclass(frozen=True)
