@@ -13,7 +13,7 @@ from controller import to_qpos
 from controller.config import DEFAULT
 from controller.offline import perform
 from controller.offline.rollouts import Roller
-from controller.offline.samcon import segment_bounds
+from controller.offline.samcon import segment_bounds, servo_sigma_rad, upper_body_servos
 from controller.tracking.plan import plan_tracking
 from controller.tracking.servo import track_qpos
 from upm.cli import main
@@ -90,6 +90,20 @@ def test_segments_cover_the_motion():
     assert segment_bounds(10, 120, 0.025) == [0, 3, 6, 9]
     assert segment_bounds(2, 120, 0.2) == [0, 1]
     assert segment_bounds(50, 120, 0.2) == [0, 24, 48, 49]
+
+
+def test_the_upper_body_servos_are_those_with_no_foot_below_or_above(model02):
+    upper = upper_body_servos(model02)
+    joints = [mujoco.mj_id2name(model02, mujoco.mjtObj.mjOBJ_JOINT, int(j))
+              for j in model02.actuator_trnid[:, 0]]
+    legs = {f"{side}{dof}" for side in "lr" for dof in (
+        "femur_rx", "femur_ry", "femur_rz", "tibia_rx", "foot_rx", "foot_rz", "toes_rx")}
+    assert {j for j, up in zip(joints, upper, strict=True) if not up} == legs
+    assert upper.sum() == len(joints) - len(legs) > 0
+    sigma = servo_sigma_rad(model02, 2.0, 0.25)
+    assert sigma.shape == (model02.nu,)
+    np.testing.assert_allclose(sigma[~upper], np.radians(2.0))
+    np.testing.assert_allclose(sigma[upper], np.radians(0.5))
 
 
 def test_simulate_with_the_offline_effort_writes_its_report(tmp_path, data_dir, capsys):

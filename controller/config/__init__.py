@@ -207,6 +207,8 @@ _RULES = (
     ("offline", "samples", _positive, "above 0"),
     ("offline", "keep", _positive, "above 0"),
     ("offline", "sigma_deg", lambda x: x >= 0, "at least 0"),
+    ("offline", "upper_sigma_share", lambda x: 0 <= x <= 1, "from 0 to 1"),
+    ("offline", "performed_upper_sigma_share", lambda x: 0 <= x <= 1, "from 0 to 1"),
     ("offline", "coherence", lambda x: 0 <= x <= 1, "from 0 to 1"),
     ("offline", "trouble_cost", _positive, "above 0"),
     ("offline", "backtracks", lambda x: x >= 0, "at least 0"),

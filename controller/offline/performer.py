@@ -78,7 +78,8 @@ def perform_transition(transition, context_s: float | None = None, config=None):
     b = min(n, w1 + round(tail * fps))
     asked = to_qpos(model, motion)
     result = perform(model, asked[a:b], fps, config.updated(
-        {"offline": {"warm_start": config.offline.performed_warm_start}}))
+        {"offline": {"warm_start": config.offline.performed_warm_start,
+                     "upper_sigma_share": config.offline.performed_upper_sigma_share}}))
     inside = slice(w0 - a, w1 - a)
     qpos = result.qpos
     finite = np.all(np.isfinite(qpos), axis=1)

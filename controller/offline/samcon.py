@@ -4,9 +4,10 @@ this motion without any external force?
 The body is the free-root humanoid with its position servos (the servo tracking of
 :mod:`controller.tracking`: no root actuator, ``xfrc_applied`` zero). The motion is cut
 into segments of ``offline.segment_s``. For each segment, ``offline.samples`` corrections
-of the servo targets are drawn (Gaussian, ``sigma_deg`` per servo, temporally coherent
-with the parent's correction by ``coherence``; the first sample of each parent only
-decays the parent's correction), spread evenly over the ``keep`` best states the search
+of the servo targets are drawn (Gaussian, ``sigma_deg`` per servo, the upper body's
+``upper_sigma_share`` of it, :func:`servo_sigma_rad`; temporally coherent with the
+parent's correction by ``coherence``; the first sample of each parent only decays the
+parent's correction), spread evenly over the ``keep`` best states the search
 holds at the segment's start, rolled out in MuJoCo (``mujoco.rollout`` on
 ``offline.threads`` threads: the results do not depend on it) and scored by
 :func:`controller.offline.cost.state_cost` over the segment's frames (plus
@@ -31,6 +32,48 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.config import DEFAULT, ControllerConfig
+
+
+def upper_body_servos(model) -> np.ndarray:
+    """Which servos move the upper body: their joint's body is neither on the chain from
+    the pelvis to a foot (``lfoot``, ``rfoot``) nor below a foot.
+
+    Returns
+    -------
+    numpy.ndarray
+        Bool, shape ``(nu,)``: the arms, the trunk, the neck and the head True; the hips,
+        knees, ankles and toes False.
+    """
+    import mujoco
+
+    legs = set()
+    for name in ("lfoot", "rfoot"):
+        foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if foot < 0:
+            raise ValueError(f"the model has no {name} body (not a humanoid_xml model?)")
+        body = foot
+        while body > 0:  # the foot and the bodies above it, up to the world
+            legs.add(body)
+            body = int(model.body_parentid[body])
+        legs.update(b for b in range(model.nbody) if _below(model, b, foot))
+    bodies = model.jnt_bodyid[model.actuator_trnid[:, 0]]
+    return np.array([int(b) not in legs for b in bodies], dtype=bool)
+
+
+def _below(model, body: int, ancestor: int) -> bool:
+    while body > 0:
+        body = int(model.body_parentid[body])
+        if body == ancestor:
+            return True
+    return False
+
+
+def servo_sigma_rad(model, sigma_deg: float, upper_share: float) -> np.ndarray:
+    """Standard deviation of each servo's sampled correction, rad, shape ``(nu,)``:
+    ``sigma_deg`` in the legs, ``upper_share * sigma_deg`` in the upper body
+    (:func:`upper_body_servos`)."""
+    share = np.where(upper_body_servos(model), upper_share, 1.0)
+    return math.radians(sigma_deg) * share
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,7 +164,7 @@ def search(model, plan, config: ControllerConfig = DEFAULT, progress: bool = Fal
     ref = features.reference(plan.reference_qpos, plan.fps)
     figures = body_figures(model)
     rng = np.random.default_rng(off.seed)
-    sigma = math.radians(off.sigma_deg)
+    sigma = servo_sigma_rad(sim, off.sigma_deg, off.upper_sigma_share)
     fresh = math.sqrt(max(0.0, 1.0 - off.coherence ** 2))
     nu = sim.nu
     # a pass: every segment's samples, and its lookahead's tails
